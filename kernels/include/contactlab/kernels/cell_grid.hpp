@@ -1,0 +1,83 @@
+// The contact-detection cell grid and the registration of particles in it (counting sort).
+#pragma once
+
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+#include "contactlab/kernels/scene.hpp"
+
+namespace contactlab {
+
+// How cells are numbered, which is also the order in which sorted particles are stored.
+enum class CellNumbering { kLinear, kMorton };
+
+class CellGrid {
+ public:
+  // Cells per axis G = max(1, floor(L / w)) with w = min_width (1 + 2^-40). The small
+  // widening keeps the 27-cell search exact: with w exactly D (D = 1/200 in a unit box),
+  // rounding in floor(x / w) could put two particles at distance D two cells apart.
+  // Throws InputError if min_width <= 0 or the grid would need more than kMaxKeys cells.
+  CellGrid(const Box& box, double min_width, CellNumbering numbering);
+
+  static constexpr std::uint64_t kMaxKeys = std::uint64_t{1} << 28;
+
+  const std::array<int, 3>& dims() const { return dims_; }
+  const std::array<double, 3>& cell_width() const { return width_; }
+  CellNumbering numbering() const { return numbering_; }
+  // Keys run over [0, key_count()); with Morton numbering some keys are not cells.
+  std::uint64_t key_count() const { return key_count_; }
+  std::uint64_t cell_count() const {
+    return std::uint64_t(dims_[0]) * std::uint64_t(dims_[1]) * std::uint64_t(dims_[2]);
+  }
+
+  // The cell holding a point; points on the box's upper faces belong to the last cell.
+  std::array<int, 3> coords_of(double x, double y, double z) const {
+    return {axis_coord(0, x), axis_coord(1, y), axis_coord(2, z)};
+  }
+  bool in_range(int cx, int cy, int cz) const {
+    return cx >= 0 && cy >= 0 && cz >= 0 && cx < dims_[0] && cy < dims_[1] && cz < dims_[2];
+  }
+  std::uint32_t key(int cx, int cy, int cz) const {
+    if (numbering_ == CellNumbering::kLinear) {
+      return static_cast<std::uint32_t>((cz * dims_[1] + cy) * dims_[0] + cx);
+    }
+    return spread_bits(cx) | (spread_bits(cy) << 1) | (spread_bits(cz) << 2);
+  }
+
+ private:
+  int axis_coord(int axis, double v) const {
+    const double scaled = (v - lo_[axis]) * inverse_width_[axis];
+    int c = static_cast<int>(scaled);  // scaled >= 0 for points inside the box
+    return c < dims_[axis] ? c : dims_[axis] - 1;
+  }
+  // Inserts two zero bits between consecutive bits of a 10-bit value (Morton interleave).
+  static std::uint32_t spread_bits(int v) {
+    std::uint32_t x = static_cast<std::uint32_t>(v) & 0x3ffu;
+    x = (x | (x << 16)) & 0x030000ffu;
+    x = (x | (x << 8)) & 0x0300f00fu;
+    x = (x | (x << 4)) & 0x030c30c3u;
+    x = (x | (x << 2)) & 0x09249249u;
+    return x;
+  }
+
+  std::array<int, 3> dims_{1, 1, 1};
+  std::array<double, 3> lo_{}, width_{}, inverse_width_{};
+  CellNumbering numbering_ = CellNumbering::kLinear;
+  std::uint64_t key_count_ = 1;
+};
+
+// Particles registered in cells by counting sort: the particles of the cell with key k occupy
+// slots [cell_begin[k], cell_begin[k + 1]), and slot s holds input particle slot_particle[s].
+struct CellRegistry {
+  std::vector<std::uint32_t> cell_begin;     // key_count + 1 entries
+  std::vector<std::uint32_t> slot_particle;  // slot -> input index
+  std::vector<std::uint32_t> particle_slot;  // input index -> slot
+  std::vector<std::uint32_t> particle_key;   // input index -> cell key (scratch)
+  std::uint32_t max_occupancy = 0;
+
+  void assign(const CellGrid& grid, const Scene& scene);
+};
+
+}  // namespace contactlab

@@ -1,0 +1,87 @@
+// Cell-grid contact detection in every variant of contactlab::Variant.
+//
+// One run = setup (register particles in cells; for sorted orders also permute coordinates
+// into cell order: the paper's T_s) + detection (the pair tests and the contact lists: T_c).
+// Buffers are kept between runs, so repetitions time the work and not the allocator.
+//
+// Threading: run() uses OpenMP with the variant's schedule (applied through
+// schedule(runtime)); results do not depend on the thread count or schedule.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "contactlab/kernels/cell_grid.hpp"
+#include "contactlab/kernels/contact_list.hpp"
+#include "contactlab/kernels/scene.hpp"
+#include "contactlab/kernels/variant.hpp"
+
+namespace contactlab {
+
+// Hooks around the detection loop, for measurement: thread hooks run on each OpenMP thread
+// inside the parallel region (PAPI per-thread event sets); region hooks run on the calling
+// thread just outside it (callgrind's collection toggle).
+class DetectionObserver {
+ public:
+  virtual ~DetectionObserver() = default;
+  virtual void region_begin(int /*threads*/) {}
+  virtual void thread_begin(int /*thread*/) {}
+  virtual void thread_end(int /*thread*/) {}
+  virtual void region_end() {}
+};
+
+struct DetectOptions {
+  Variant variant;
+  // Contact diameter D for scenes without per-particle diameters; ignored otherwise.
+  double diameter = 0.0;
+  int threads = 0;  // 0 = OpenMP's default
+  DetectionObserver* observer = nullptr;
+};
+
+struct DetectRun {
+  double setup_s = 0.0;   // T_s: registration and reordering
+  double detect_s = 0.0;  // T_c: pair tests and contact lists
+  double total_s() const { return setup_s + detect_s; }
+  std::vector<double> thread_busy_s;  // each thread's time inside the detection loop
+  std::uint64_t candidate_tests = 0;  // pair tests made (each pair twice with the full stencil)
+  std::uint64_t contact_pairs = 0;
+  std::uint32_t max_cell_occupancy = 0;
+  std::array<int, 3> grid_dims{};
+  int threads = 0;
+};
+
+class ContactDetector {
+ public:
+  // Throws InputError for D <= 0 (without per-particle diameters) or an invalid schedule.
+  DetectRun run(const Scene& scene, const DetectOptions& options);
+
+  // Contacts of the last run in working ids (see working_to_input()).
+  const ContactList& contacts() const { return contacts_; }
+  // Working id -> input row; empty when the working order is the input order.
+  std::span<const std::uint32_t> working_to_input() const {
+    return working_is_sorted_ ? std::span<const std::uint32_t>(registry_.slot_particle)
+                              : std::span<const std::uint32_t>();
+  }
+  // The last run's contacts in input ids with rows sorted: comparable across variants.
+  ContactList canonical_contacts() const { return canonicalize(contacts_, working_to_input()); }
+
+ private:
+  template <class Layout>
+  void detect(const CellGrid& grid, const Layout& layout, const DetectOptions& options,
+              DetectRun& run);
+
+  CellRegistry registry_;
+  std::vector<double> sorted_x_, sorted_y_, sorted_z_, sorted_d_;
+  bool working_is_sorted_ = false;  // working ids are slots (sorted orders) or input rows
+  ContactList contacts_;
+  // Per-thread partner buffers and per-particle bookkeeping, kept between runs.
+  std::vector<std::vector<std::uint32_t>> thread_partners_;
+  std::vector<std::uint32_t> found_count_;
+  std::vector<std::uint16_t> found_thread_;
+  std::vector<std::uint64_t> found_offset_;
+  std::vector<std::uint32_t> reverse_count_;
+};
+
+}  // namespace contactlab

@@ -1,0 +1,16 @@
+// Errors that carry a one-line message meant for the user (bad input, bad options).
+#pragma once
+
+#include <stdexcept>
+#include <string>
+
+namespace contactlab {
+
+// Thrown for anything the user can fix: malformed files, bad parameters, unknown variants.
+// The message is one line and names the problem (and the file and line where there is one).
+class InputError : public std::runtime_error {
+ public:
+  explicit InputError(const std::string& message) : std::runtime_error(message) {}
+};
+
+}  // namespace contactlab

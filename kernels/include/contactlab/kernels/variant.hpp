@@ -1,0 +1,73 @@
+// A contact-detection variant as a value: what the CLI parses, the tuner enumerates, the
+// benchmarks register and the tests iterate. Canonical text form: loop/order/stencil/schedule,
+// e.g. "particle/sorted/full/static,200"; the three-part "loop/order/schedule" means the
+// paper's full stencil.
+#pragma once
+
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace contactlab {
+
+// What one parallel iteration is: a cell of the grid (paper Fig. 4) or a particle (Fig. 5).
+enum class LoopKind { kCell, kParticle };
+
+// Memory order of the particles during detection: input order, grouped by cell in the
+// grid's linear (z, y, x) order as in the paper, or grouped by cell in Morton (Z-curve) order
+// of the cells, which keeps neighbouring cells closer in memory.
+enum class Order { kUnsorted, kSorted, kMorton };
+
+// The paper's 27-cell stencil tests every pair twice (once from each particle); the half
+// stencil (own cell + 13 forward neighbours) tests it once and writes both partner lists.
+enum class Stencil { kFull, kHalf };
+
+enum class ScheduleKind { kStatic, kDynamic, kGuided };
+
+struct Schedule {
+  ScheduleKind kind = ScheduleKind::kStatic;
+  // Iterations per chunk. 0 only with static: plain block partition (one chunk per thread).
+  int chunk = 0;
+  friend bool operator==(const Schedule&, const Schedule&) = default;
+};
+
+struct Variant {
+  LoopKind loop = LoopKind::kParticle;
+  Order order = Order::kSorted;
+  Stencil stencil = Stencil::kFull;
+  Schedule schedule;
+  friend bool operator==(const Variant&, const Variant&) = default;
+};
+
+std::string_view to_string(LoopKind loop);
+std::string_view to_string(Order order);
+std::string_view to_string(Stencil stencil);
+std::string_view to_string(ScheduleKind kind);
+std::string to_string(const Schedule& schedule);  // "static", "static,200", "dynamic,4"
+std::string to_string(const Variant& variant);    // always the four-part canonical form
+
+// Parsers throw InputError with a one-line message naming the bad part and the choices.
+LoopKind parse_loop(std::string_view text);
+Order parse_order(std::string_view text);
+Stencil parse_stencil(std::string_view text);
+Schedule parse_schedule(std::string_view text);  // "dynamic" alone means "dynamic,1"
+Variant parse_variant(std::string_view text);
+
+// A grid of variants: the cartesian product of the listed choices.
+struct VariantSpace {
+  std::vector<LoopKind> loops;
+  std::vector<Order> orders;
+  std::vector<Stencil> stencils;
+  std::vector<Schedule> schedules;
+};
+
+std::vector<Variant> enumerate(const VariantSpace& space);
+
+// The five configurations of Takagi et al. (Tables 2-5 and 7; chunk 200 for Table 7).
+std::vector<Variant> paper_variants();
+
+// Every loop, order and stencil with the schedules static, static,k, dynamic,k and guided,k
+// for each k in `chunks`.
+VariantSpace all_variants(const std::vector<int>& chunks);
+
+}  // namespace contactlab
