@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <string>
+#include <utility>
 
 #include "contactlab/kernels/error.hpp"
 
@@ -44,36 +45,76 @@ CellGrid::CellGrid(const Box& box, double min_width, CellNumbering numbering)
   }
 }
 
-void CellRegistry::assign(const CellGrid& grid, const Scene& scene) {
+void CellRegistry::assign(const CellGrid& grid, const Scene& scene, Scene* sorted) {
   const std::size_t n = scene.size();
   const std::uint64_t keys = grid.key_count();
-  // Counting sort: counts land two places up so that, after the prefix sum, cell_begin[k + 1]
-  // is the start of cell k and serves as its fill cursor; once filled it holds the end of k,
-  // which is the start of k + 1, leaving cell_begin[k] = start of k.
-  cell_begin.assign(keys + 2, 0);
-  particle_key.resize(n);
+  // Sort (key, input index) pairs by key with a stable LSD radix sort. A counting sort over
+  // the cell table would touch the (up to 2^28-entry) table at random once per particle; the
+  // radix passes keep their 2^kDigitBits counters in L1 and write in sequential streams.
+  constexpr int kDigitBits = 12;
+  constexpr std::uint64_t kBuckets = std::uint64_t{1} << kDigitBits;
+  int key_bits = 1;
+  while ((std::uint64_t{1} << key_bits) < keys) ++key_bits;
+  const int passes = (key_bits + kDigitBits - 1) / kDigitBits;
+
+  sort_buffer_.resize(n);
+  sort_scratch_.resize(n);
   for (std::size_t i = 0; i < n; ++i) {
     const auto c = grid.coords_of(scene.x[i], scene.y[i], scene.z[i]);
-    const std::uint32_t key = grid.key(c[0], c[1], c[2]);
-    particle_key[i] = key;
-    ++cell_begin[key + 2];
+    sort_buffer_[i] = (std::uint64_t{grid.key(c[0], c[1], c[2])} << 32) | i;
   }
-  std::uint32_t largest = 0;
-  std::uint32_t running = 0;
-  for (std::uint64_t k = 2; k < keys + 2; ++k) {
-    largest = std::max(largest, cell_begin[k]);
-    running += cell_begin[k];
-    cell_begin[k] = running;
+  std::vector<std::uint64_t> histogram(kBuckets);
+  for (int pass = 0; pass < passes; ++pass) {
+    const int shift = 32 + pass * kDigitBits;
+    std::fill(histogram.begin(), histogram.end(), 0);
+    for (const std::uint64_t entry : sort_buffer_) ++histogram[(entry >> shift) & (kBuckets - 1)];
+    std::uint64_t running = 0;
+    for (auto& h : histogram) running += std::exchange(h, running);
+    for (const std::uint64_t entry : sort_buffer_) {
+      sort_scratch_[histogram[(entry >> shift) & (kBuckets - 1)]++] = entry;
+    }
+    sort_buffer_.swap(sort_scratch_);
   }
-  max_occupancy = largest;
+
+  // Slots in key order; cell_begin[k] = first slot whose key is >= k.
   slot_particle.resize(n);
-  particle_slot.resize(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    const std::uint32_t slot = cell_begin[particle_key[i] + 1]++;
-    slot_particle[slot] = static_cast<std::uint32_t>(i);
-    particle_slot[i] = slot;
-  }
   cell_begin.resize(keys + 1);
+  std::uint64_t next_key = 0;  // cell_begin is filled for every key below next_key
+  std::uint32_t largest = 0, run_start = 0;
+  for (std::uint32_t s = 0; s < n; ++s) {
+    const std::uint64_t entry = sort_buffer_[s];
+    const std::uint64_t slot_key = entry >> 32;
+    slot_particle[s] = static_cast<std::uint32_t>(entry);
+    if (slot_key >= next_key) {  // the first slot of a new cell
+      largest = std::max(largest, s - run_start);
+      run_start = s;
+      while (next_key <= slot_key) cell_begin[next_key++] = s;
+    }
+  }
+  largest = std::max(largest, static_cast<std::uint32_t>(n) - run_start);
+  while (next_key <= keys) cell_begin[next_key++] = static_cast<std::uint32_t>(n);
+  max_occupancy = largest;
+
+  if (sorted) {
+    // The paper's reordering: coordinates copied into slot order.
+    sorted->box = scene.box;
+    sorted->x.resize(n);
+    sorted->y.resize(n);
+    sorted->z.resize(n);
+    sorted->diameter.resize(scene.diameter.size());
+    const bool diameters = scene.has_diameters();
+    for (std::size_t s = 0; s < n; ++s) {
+      const std::uint32_t i = slot_particle[s];
+      sorted->x[s] = scene.x[i];
+      sorted->y[s] = scene.y[i];
+      sorted->z[s] = scene.z[i];
+      if (diameters) sorted->diameter[s] = scene.diameter[i];
+    }
+    particle_slot.clear();
+  } else {
+    particle_slot.resize(n);
+    for (std::uint32_t s = 0; s < n; ++s) particle_slot[slot_particle[s]] = s;
+  }
 }
 
 }  // namespace contactlab

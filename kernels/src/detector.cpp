@@ -6,7 +6,6 @@
 #include <omp.h>
 
 #include <algorithm>
-#include <atomic>
 #include <cstring>
 
 #include "contactlab/kernels/error.hpp"
@@ -15,25 +14,31 @@
 namespace contactlab {
 namespace {
 
-// Stencil offsets (dx, dy, dz). Index 0 is always the own cell: its search range is special
-// (skip oneself with the full stencil, only later slots with the half stencil).
-struct StencilOffsets {
-  std::array<std::array<int, 3>, 27> offsets{};
-  int count = 0;
+// The stencil as rows of cells along x: for each (dy, dz) the cells dx in [dx_lo, dx_hi].
+// With the linear numbering a row's cells are consecutive keys, so its particles are one slot
+// range found with two loads. Rows are in ascending key order (z, then y).
+struct StencilRow {
+  int dy, dz, dx_lo, dx_hi;
 };
 
-StencilOffsets make_stencil(Stencil stencil) {
-  StencilOffsets result;
-  result.offsets[result.count++] = {0, 0, 0};
+struct StencilRows {
+  std::array<StencilRow, 9> rows{};
+  int count = 0;
+  int own = 0;  // the row holding the home cell
+};
+
+StencilRows make_stencil(Stencil stencil) {
+  StencilRows result;
   for (int dz = -1; dz <= 1; ++dz) {
     for (int dy = -1; dy <= 1; ++dy) {
-      for (int dx = -1; dx <= 1; ++dx) {
-        if (dx == 0 && dy == 0 && dz == 0) continue;
-        // Forward half: (dz, dy, dx) lexicographically after (0, 0, 0). Each unordered pair
-        // of distinct neighbour cells is then visited from exactly one of them.
-        const bool forward = dz > 0 || (dz == 0 && (dy > 0 || (dy == 0 && dx > 0)));
-        if (stencil == Stencil::kFull || forward) result.offsets[result.count++] = {dx, dy, dz};
-      }
+      // Forward half: own cell and the cells (dz, dy, dx) lexicographically after (0, 0, 0),
+      // so each unordered pair of distinct neighbour cells is visited from one of them only.
+      const bool before_own = dz < 0 || (dz == 0 && dy < 0);
+      if (stencil == Stencil::kHalf && before_own) continue;
+      const bool own = dz == 0 && dy == 0;
+      if (own) result.own = result.count;
+      const int dx_lo = stencil == Stencil::kHalf && own ? 0 : -1;
+      result.rows[result.count++] = {dy, dz, dx_lo, 1};
     }
   }
   return result;
@@ -43,25 +48,44 @@ struct SlotRange {
   std::uint32_t begin, end;
 };
 
-// The occupied cells of a home cell's stencil; ranges[0] is the own cell.
+// The particles of a home cell's stencil as slot ranges, ranges[own] holding the home cell.
+// With the half stencil ranges[own] starts at the home cell (no stencil cell precedes it).
 struct NeighbourRanges {
   std::array<SlotRange, 27> ranges{};
   int count = 0;
-  std::uint64_t candidates = 0;  // slots in all ranges
+  int own = 0;
+  std::uint64_t candidates = 0;  // slots in all ranges, the home particle's own included
 
-  void build(const CellGrid& grid, const CellRegistry& registry, const StencilOffsets& stencil,
+  void build(const CellGrid& grid, const CellRegistry& registry, const StencilRows& stencil,
              const std::array<int, 3>& home) {
     count = 0;
     candidates = 0;
-    for (int o = 0; o < stencil.count; ++o) {
-      const auto& d = stencil.offsets[o];
-      const int cx = home[0] + d[0], cy = home[1] + d[1], cz = home[2] + d[2];
-      if (!grid.in_range(cx, cy, cz)) continue;
-      const std::uint32_t key = grid.key(cx, cy, cz);
-      const SlotRange range{registry.cell_begin[key], registry.cell_begin[key + 1]};
-      if (o != 0 && range.begin == range.end) continue;
-      ranges[count++] = range;
-      candidates += range.end - range.begin;
+    const auto& dims = grid.dims();
+    const std::uint32_t* begin_of = registry.cell_begin.data();
+    const bool linear = grid.numbering() == CellNumbering::kLinear;
+    for (int r = 0; r < stencil.count; ++r) {
+      const StencilRow& row = stencil.rows[r];
+      const int cy = home[1] + row.dy, cz = home[2] + row.dz;
+      if (cy < 0 || cz < 0 || cy >= dims[1] || cz >= dims[2]) continue;
+      const int x_lo = std::max(home[0] + row.dx_lo, 0);
+      const int x_hi = std::min(home[0] + row.dx_hi, dims[0] - 1);
+      if (linear) {
+        if (r == stencil.own) own = count;
+        const SlotRange range{begin_of[grid.key(x_lo, cy, cz)], begin_of[grid.key(x_hi, cy, cz) + 1]};
+        if (range.begin == range.end) continue;  // never the own row: it holds the home
+        ranges[count++] = range;
+        candidates += range.end - range.begin;
+        continue;
+      }
+      // Morton keys of a row are not consecutive: one range per cell.
+      for (int cx = x_lo; cx <= x_hi; ++cx) {
+        const std::uint32_t key = grid.key(cx, cy, cz);
+        const SlotRange range{begin_of[key], begin_of[key + 1]};
+        if (range.begin == range.end) continue;  // never the home cell
+        if (r == stencil.own && cx == home[0]) own = count;
+        ranges[count++] = range;
+        candidates += range.end - range.begin;
+      }
     }
   }
 };
@@ -69,7 +93,6 @@ struct NeighbourRanges {
 // Coordinates stored in slot order: working id == slot, no indirection.
 struct SortedLayout {
   const double *x, *y, *z, *d;
-  const std::uint32_t* particle_slot_unused;
   std::uint32_t particle_at(std::uint32_t slot) const { return slot; }
   std::uint32_t slot_of(std::uint32_t particle) const { return particle; }
 };
@@ -86,10 +109,13 @@ struct UnsortedLayout {
 // Tests home particle h (in slot s_h) against the candidate ranges, appending partners.
 template <class Layout, bool kHalf, bool kDiameters>
 inline void test_home(const Layout& layout, const NeighbourRanges& nb, std::uint32_t h,
-                      std::uint32_t s_h, double reach_sq, std::vector<std::uint32_t>& out) {
+                      std::uint32_t s_h, double reach_sq, detail::PartnerBuffer& out) {
   const double xi = layout.x[h], yi = layout.y[h], zi = layout.z[h];
   const double di = kDiameters ? layout.d[h] : 0.0;
   auto test_range = [&](std::uint32_t begin, std::uint32_t end) {
+    if (begin >= end) return;
+    std::uint32_t* next = out.tail(end - begin);
+    std::size_t found = 0;
     for (std::uint32_t s = begin; s < end; ++s) {
       const std::uint32_t j = layout.particle_at(s);
       const double dx = xi - layout.x[j], dy = yi - layout.y[j], dz = zi - layout.z[j];
@@ -99,17 +125,23 @@ inline void test_home(const Layout& layout, const NeighbourRanges& nb, std::uint
       } else {
         touching = in_contact(dx, dy, dz, reach_sq);
       }
-      if (touching) out.push_back(j);
+      next[found] = j;
+      found += touching;
     }
+    out.advance(found);
   };
-  const SlotRange own = nb.ranges[0];
-  if constexpr (kHalf) {
-    test_range(s_h + 1, own.end);
-  } else {
-    test_range(own.begin, s_h);
-    test_range(s_h + 1, own.end);
+  for (int r = 0; r < nb.count; ++r) {
+    const SlotRange range = nb.ranges[r];
+    if (r != nb.own) {
+      test_range(range.begin, range.end);
+    } else if constexpr (kHalf) {
+      // The range starts at the home cell: only its later slots and the cells after it.
+      test_range(s_h + 1, range.end);
+    } else {
+      test_range(range.begin, s_h);
+      test_range(s_h + 1, range.end);
+    }
   }
-  for (int r = 1; r < nb.count; ++r) test_range(nb.ranges[r].begin, nb.ranges[r].end);
 }
 
 omp_sched_t to_omp(ScheduleKind kind) {
@@ -143,14 +175,17 @@ void ContactDetector::detect(const CellGrid& grid, const Layout& layout,
   const int threads = run.threads;
   const bool half = variant.stencil == Stencil::kHalf;
   const bool diameters = layout.d != nullptr;
-  const StencilOffsets stencil = make_stencil(variant.stencil);
+  const StencilRows stencil = make_stencil(variant.stencil);
   const double reach_sq = options.diameter * options.diameter;
 
-  if (thread_partners_.size() < static_cast<std::size_t>(threads)) thread_partners_.resize(threads);
+  if (thread_partners_.size() < static_cast<std::size_t>(threads)) {
+    thread_partners_.resize(threads);
+    thread_homes_.resize(threads);
+  }
   found_count_.resize(n);
-  found_thread_.resize(n);
-  found_offset_.resize(n);
-  if (half) reverse_count_.resize(n);
+  // Half stencil: reverse_count_[t * n + j] counts the finds (h, j) of thread t, later the
+  // start of thread t's share of row j's reverse entries. Per-thread counts avoid atomics.
+  if (half) reverse_count_.resize(std::size_t{n} * threads);
   contacts_.offsets.resize(std::size_t{n} + 1);
   run.thread_busy_s.assign(threads, 0.0);
   std::vector<std::uint64_t> thread_tests(threads, 0);
@@ -162,20 +197,21 @@ void ContactDetector::detect(const CellGrid& grid, const Layout& layout,
 #pragma omp parallel num_threads(threads)
   {
     const int tid = omp_get_thread_num();
-    std::vector<std::uint32_t>& out = thread_partners_[tid];
+    detail::PartnerBuffer& out = thread_partners_[tid];
+    std::vector<std::uint32_t>& homes = thread_homes_[tid];
     out.clear();
+    homes.clear();
     std::uint64_t tests = 0;
     NeighbourRanges nb;
 
     auto visit = [&](auto half_tag, auto diameters_tag, std::uint32_t h, std::uint32_t s_h) {
-      const std::uint64_t before = out.size();
+      const std::size_t before = out.size();
       test_home<Layout, decltype(half_tag)::value, decltype(diameters_tag)::value>(
           layout, nb, h, s_h, reach_sq, out);
       found_count_[h] = static_cast<std::uint32_t>(out.size() - before);
-      found_thread_[h] = static_cast<std::uint16_t>(tid);
-      found_offset_[h] = before;
-      // Own cell: with the half stencil only later slots; with the full one all but oneself.
-      const SlotRange own = nb.ranges[0];
+      homes.push_back(h);
+      // Own range: with the half stencil only later slots; with the full one all but oneself.
+      const SlotRange own = nb.ranges[nb.own];
       tests += nb.candidates - (decltype(half_tag)::value ? (s_h + 1 - own.begin) : 1);
     };
 
@@ -216,42 +252,46 @@ void ContactDetector::detect(const CellGrid& grid, const Layout& layout,
     thread_tests[tid] = tests;
     if (options.observer) options.observer->thread_end(tid);
 
-    // Assemble the rows. Each particle's own finds sit in one thread's buffer; with the half
-    // stencil each find (h, j) also belongs in j's row, placed through per-row atomic cursors.
+    // Assemble the rows: row h = h's own finds, then (half stencil) every find (g, h) made
+    // from another particle g, grouped by the thread that made it.
+    std::uint32_t* const reverse = half ? reverse_count_.data() + std::size_t{n} * tid : nullptr;
     if (half) {
-#pragma omp for schedule(static)
-      for (std::uint32_t i = 0; i < n; ++i) reverse_count_[i] = 0;
-      for (const std::uint32_t j : out) {
-        std::atomic_ref<std::uint32_t>(reverse_count_[j]).fetch_add(1, std::memory_order_relaxed);
-      }
-#pragma omp barrier
+      std::fill(reverse, reverse + n, 0u);
+      for (const std::uint32_t j : std::span(out.data(), out.size())) ++reverse[j];
     }
+#pragma omp barrier
 #pragma omp single
     {
       std::uint64_t total = 0;
       contacts_.offsets[0] = 0;
       for (std::uint32_t i = 0; i < n; ++i) {
-        total += found_count_[i] + (half ? reverse_count_[i] : 0);
+        std::uint32_t row = found_count_[i];
+        if (half) {
+          // Exclusive prefix over threads: where each thread's reverse entries of row i start.
+          for (int t = 0; t < threads; ++t) {
+            std::uint32_t& count = reverse_count_[std::size_t{n} * t + i];
+            const std::uint32_t share = count;
+            count = row;
+            row += share;
+          }
+        }
+        total += row;
         contacts_.offsets[i + 1] = total;
-        if (half) reverse_count_[i] = found_count_[i];  // becomes the row's fill cursor
       }
       contacts_.partners.resize(total);
     }
-    std::uint32_t* partners = contacts_.partners.data();
-#pragma omp for schedule(static)
-    for (std::uint32_t h = 0; h < n; ++h) {
-      const std::uint32_t* found = thread_partners_[found_thread_[h]].data() + found_offset_[h];
+    std::uint32_t* const partners = contacts_.partners.data();
+    const std::uint32_t* found = out.data();
+    for (const std::uint32_t h : homes) {
       const std::uint32_t count = found_count_[h];
-      if (count == 0) continue;
       std::memcpy(partners + contacts_.offsets[h], found, count * sizeof(std::uint32_t));
       if (half) {
         for (std::uint32_t k = 0; k < count; ++k) {
           const std::uint32_t j = found[k];
-          const std::uint32_t at = std::atomic_ref<std::uint32_t>(reverse_count_[j])
-                                       .fetch_add(1, std::memory_order_relaxed);
-          partners[contacts_.offsets[j] + at] = h;
+          partners[contacts_.offsets[j] + reverse[j]++] = h;
         }
       }
+      found += count;
     }
   }
   run.detect_s = omp_get_wtime() - start;
@@ -281,30 +321,14 @@ DetectRun ContactDetector::run(const Scene& scene, const DetectOptions& options)
   run.grid_dims = grid.dims();
 
   const double setup_start = omp_get_wtime();
-  registry_.assign(grid, scene);
   working_is_sorted_ = order != Order::kUnsorted;
-  const std::size_t n = scene.size();
-  if (working_is_sorted_) {
-    sorted_x_.resize(n);
-    sorted_y_.resize(n);
-    sorted_z_.resize(n);
-    sorted_d_.resize(diameters ? n : 0);
-    const std::uint32_t* slot_particle = registry_.slot_particle.data();
-#pragma omp parallel for schedule(static) num_threads(run.threads)
-    for (std::size_t s = 0; s < n; ++s) {
-      const std::uint32_t i = slot_particle[s];
-      sorted_x_[s] = scene.x[i];
-      sorted_y_[s] = scene.y[i];
-      sorted_z_[s] = scene.z[i];
-      if (diameters) sorted_d_[s] = scene.diameter[i];
-    }
-  }
+  registry_.assign(grid, scene, working_is_sorted_ ? &sorted_ : nullptr);
   run.setup_s = omp_get_wtime() - setup_start;
   run.max_cell_occupancy = registry_.max_occupancy;
 
   if (working_is_sorted_) {
-    const SortedLayout layout{sorted_x_.data(), sorted_y_.data(), sorted_z_.data(),
-                              diameters ? sorted_d_.data() : nullptr, nullptr};
+    const SortedLayout layout{sorted_.x.data(), sorted_.y.data(), sorted_.z.data(),
+                              diameters ? sorted_.diameter.data() : nullptr};
     detect(grid, layout, options, run);
   } else {
     const UnsortedLayout layout{scene.x.data(),

@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "contactlab/kernels/large_vector.hpp"
 #include "contactlab/kernels/scene.hpp"
 
 namespace contactlab {
@@ -68,16 +69,21 @@ class CellGrid {
   std::uint64_t key_count_ = 1;
 };
 
-// Particles registered in cells by counting sort: the particles of the cell with key k occupy
+// Particles registered in cells (sorted by cell key, stably): the particles of the cell with key k occupy
 // slots [cell_begin[k], cell_begin[k + 1]), and slot s holds input particle slot_particle[s].
 struct CellRegistry {
-  std::vector<std::uint32_t> cell_begin;     // key_count + 1 entries
-  std::vector<std::uint32_t> slot_particle;  // slot -> input index
-  std::vector<std::uint32_t> particle_slot;  // input index -> slot
-  std::vector<std::uint32_t> particle_key;   // input index -> cell key (scratch)
+  LargeVector<std::uint32_t> cell_begin;     // key_count + 1 entries
+  LargeVector<std::uint32_t> slot_particle;  // slot -> input index
+  LargeVector<std::uint32_t> particle_slot;  // input index -> slot
   std::uint32_t max_occupancy = 0;
 
-  void assign(const CellGrid& grid, const Scene& scene);
+  // Registers the particles. With `sorted`, also copies the coordinates (and diameters) into
+  // slot order within the same pass: the paper's reordering. particle_slot is filled only
+  // without it (the unsorted layout needs it; sorted ones use slots as ids).
+  void assign(const CellGrid& grid, const Scene& scene, Scene* sorted = nullptr);
+
+ private:
+  LargeVector<std::uint64_t> sort_buffer_, sort_scratch_;  // (key << 32 | index) pairs
 };
 
 }  // namespace contactlab

@@ -8,6 +8,7 @@
 // schedule(runtime)); results do not depend on the thread count or schedule.
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <span>
@@ -19,6 +20,30 @@
 #include "contactlab/kernels/variant.hpp"
 
 namespace contactlab {
+
+namespace detail {
+
+// Appends partners without a branch per test: each candidate is written to the next free
+// place and the size advances only on contact (a contact is ~1 candidate in 6, so a branch
+// would mispredict often).
+class PartnerBuffer {
+ public:
+  std::size_t size() const { return size_; }
+  const std::uint32_t* data() const { return storage_.data(); }
+  void clear() { size_ = 0; }
+  // Room for `extra` more entries at the end.
+  std::uint32_t* tail(std::size_t extra) {
+    if (size_ + extra > storage_.size()) storage_.resize(std::max(2 * storage_.size(), size_ + extra));
+    return storage_.data() + size_;
+  }
+  void advance(std::size_t count) { size_ += count; }
+
+ private:
+  std::vector<std::uint32_t> storage_;
+  std::size_t size_ = 0;
+};
+
+}  // namespace detail
 
 // Hooks around the detection loop, for measurement: thread hooks run on each OpenMP thread
 // inside the parallel region (PAPI per-thread event sets); region hooks run on the calling
@@ -73,14 +98,13 @@ class ContactDetector {
               DetectRun& run);
 
   CellRegistry registry_;
-  std::vector<double> sorted_x_, sorted_y_, sorted_z_, sorted_d_;
+  Scene sorted_;  // coordinates in slot order, for the sorted orders
   bool working_is_sorted_ = false;  // working ids are slots (sorted orders) or input rows
   ContactList contacts_;
   // Per-thread partner buffers and per-particle bookkeeping, kept between runs.
-  std::vector<std::vector<std::uint32_t>> thread_partners_;
-  std::vector<std::uint32_t> found_count_;
-  std::vector<std::uint16_t> found_thread_;
-  std::vector<std::uint64_t> found_offset_;
+  std::vector<detail::PartnerBuffer> thread_partners_;
+  std::vector<std::vector<std::uint32_t>> thread_homes_;  // particles each thread visited, in order
+  std::vector<std::uint32_t> found_count_;                 // own finds per particle
   std::vector<std::uint32_t> reverse_count_;
 };
 
