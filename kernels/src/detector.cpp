@@ -301,7 +301,9 @@ void ContactDetector::detect(const CellGrid& grid, const Layout& layout,
   run.contact_pairs = contacts_.pair_count();
 }
 
-DetectRun ContactDetector::run(const Scene& scene, const DetectOptions& options) {
+// Validates the options, builds the grid and registers (and for sorted orders reorders) the
+// particles: the paper's T_s.
+CellGrid ContactDetector::prepare(const Scene& scene, const DetectOptions& options, DetectRun& run) {
   const bool diameters = scene.has_diameters();
   if (!diameters && !(options.diameter > 0.0 && options.diameter < 1e300)) {
     throw InputError("diameter D must be a positive finite number (got " +
@@ -313,7 +315,6 @@ DetectRun ContactDetector::run(const Scene& scene, const DetectOptions& options)
   }
   if (scene.size() >= UINT32_MAX) throw InputError("at most 2^32 - 2 particles are supported");
 
-  DetectRun run;
   run.threads = options.threads > 0 ? options.threads : omp_get_max_threads();
   const Order order = options.variant.order;
   const CellGrid grid(scene.box, diameters ? scene.max_diameter() : options.diameter,
@@ -325,7 +326,13 @@ DetectRun ContactDetector::run(const Scene& scene, const DetectOptions& options)
   registry_.assign(grid, scene, working_is_sorted_ ? &sorted_ : nullptr);
   run.setup_s = omp_get_wtime() - setup_start;
   run.max_cell_occupancy = registry_.max_occupancy;
+  return grid;
+}
 
+DetectRun ContactDetector::run(const Scene& scene, const DetectOptions& options) {
+  DetectRun run;
+  const CellGrid grid = prepare(scene, options, run);
+  const bool diameters = scene.has_diameters();
   if (working_is_sorted_) {
     const SortedLayout layout{sorted_.x.data(), sorted_.y.data(), sorted_.z.data(),
                               diameters ? sorted_.diameter.data() : nullptr};
@@ -340,6 +347,43 @@ DetectRun ContactDetector::run(const Scene& scene, const DetectOptions& options)
     detect(grid, layout, options, run);
   }
   return run;
+}
+
+std::vector<std::uint32_t> ContactDetector::iteration_work(const Scene& scene,
+                                                           const DetectOptions& options) {
+  DetectRun run;
+  const CellGrid grid = prepare(scene, options, run);
+  const Variant& variant = options.variant;
+  const StencilRows stencil = make_stencil(variant.stencil);
+  const bool half = variant.stencil == Stencil::kHalf;
+  // The home particle's cell and slot, whichever the order: registration already knows them.
+  const Scene& coordinates = working_is_sorted_ ? sorted_ : scene;
+  auto slot_of = [&](std::uint32_t h) { return working_is_sorted_ ? h : registry_.particle_slot[h]; };
+  NeighbourRanges nb;
+  auto tests_of = [&](std::uint32_t s_h) {
+    const SlotRange own = nb.ranges[nb.own];
+    return static_cast<std::uint32_t>(nb.candidates - (half ? (s_h + 1 - own.begin) : 1));
+  };
+  std::vector<std::uint32_t> work;
+  const std::uint32_t n = static_cast<std::uint32_t>(scene.size());
+  if (variant.loop == LoopKind::kParticle) {
+    work.resize(n);
+    for (std::uint32_t h = 0; h < n; ++h) {
+      nb.build(grid, registry_, stencil,
+               grid.coords_of(coordinates.x[h], coordinates.y[h], coordinates.z[h]));
+      work[h] = tests_of(slot_of(h));
+    }
+  } else {
+    work.assign(grid.key_count(), 0);
+    for (std::uint64_t key = 0; key < grid.key_count(); ++key) {
+      const std::uint32_t begin = registry_.cell_begin[key], end = registry_.cell_begin[key + 1];
+      if (begin == end) continue;
+      const std::uint32_t first = registry_.slot_particle[begin];
+      nb.build(grid, registry_, stencil, grid.coords_of(scene.x[first], scene.y[first], scene.z[first]));
+      for (std::uint32_t s = begin; s < end; ++s) work[key] += tests_of(s);
+    }
+  }
+  return work;
 }
 
 }  // namespace contactlab

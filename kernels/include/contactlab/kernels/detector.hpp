@@ -82,6 +82,12 @@ class ContactDetector {
   // Throws InputError for D <= 0 (without per-particle diameters) or an invalid schedule.
   DetectRun run(const Scene& scene, const DetectOptions& options);
 
+  // The pair tests each iteration of the variant's parallel loop will make (a particle, or a
+  // cell with all its particles), in loop order: the exact work a schedule distributes among
+  // threads, known from the cell occupancy before any pair is tested. The tuner's zero-run
+  // model reads it. Costs one registration and a pass over the stencils.
+  std::vector<std::uint32_t> iteration_work(const Scene& scene, const DetectOptions& options);
+
   // Contacts of the last run in working ids (see working_to_input()).
   const ContactList& contacts() const { return contacts_; }
   // Working id -> input row; empty when the working order is the input order.
@@ -93,6 +99,7 @@ class ContactDetector {
   ContactList canonical_contacts() const { return canonicalize(contacts_, working_to_input()); }
 
  private:
+  CellGrid prepare(const Scene& scene, const DetectOptions& options, DetectRun& run);
   template <class Layout>
   void detect(const CellGrid& grid, const Layout& layout, const DetectOptions& options,
               DetectRun& run);
