@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cstring>
+#include <type_traits>
 
 #include "contactlab/kernels/error.hpp"
 #include "contactlab/kernels/pair_test.hpp"
@@ -90,16 +91,27 @@ struct NeighbourRanges {
   }
 };
 
+// Where the kernel reads particles. `cell_x/y/z` are the double coordinates the particles
+// were registered with (a home particle's cell must be found exactly as registration did);
+// `x/y/z/d` are the coordinates the pair test reads, in the variant's precision T.
+template <class T>
+struct Coordinates {
+  const double *cell_x, *cell_y, *cell_z;
+  const T *x, *y, *z, *d;
+};
+
 // Coordinates stored in slot order: working id == slot, no indirection.
-struct SortedLayout {
-  const double *x, *y, *z, *d;
+template <class T>
+struct SortedLayout : Coordinates<T> {
+  using Real = T;
   std::uint32_t particle_at(std::uint32_t slot) const { return slot; }
   std::uint32_t slot_of(std::uint32_t particle) const { return particle; }
 };
 
 // Coordinates in input order: cell lists map slots to input ids (the paper's unsorted case).
-struct UnsortedLayout {
-  const double *x, *y, *z, *d;
+template <class T>
+struct UnsortedLayout : Coordinates<T> {
+  using Real = T;
   const std::uint32_t* slot_particle;
   const std::uint32_t* particle_slot;
   std::uint32_t particle_at(std::uint32_t slot) const { return slot_particle[slot]; }
@@ -109,16 +121,18 @@ struct UnsortedLayout {
 // Tests home particle h (in slot s_h) against the candidate ranges, appending partners.
 template <class Layout, bool kHalf, bool kDiameters>
 inline void test_home(const Layout& layout, const NeighbourRanges& nb, std::uint32_t h,
-                      std::uint32_t s_h, double reach_sq, detail::PartnerBuffer& out) {
-  const double xi = layout.x[h], yi = layout.y[h], zi = layout.z[h];
-  const double di = kDiameters ? layout.d[h] : 0.0;
+                      std::uint32_t s_h, typename Layout::Real reach_sq,
+                      detail::PartnerBuffer& out) {
+  using Real = typename Layout::Real;
+  const Real xi = layout.x[h], yi = layout.y[h], zi = layout.z[h];
+  const Real di = kDiameters ? layout.d[h] : Real(0);
   auto test_range = [&](std::uint32_t begin, std::uint32_t end) {
     if (begin >= end) return;
     std::uint32_t* next = out.tail(end - begin);
     std::size_t found = 0;
     for (std::uint32_t s = begin; s < end; ++s) {
       const std::uint32_t j = layout.particle_at(s);
-      const double dx = xi - layout.x[j], dy = yi - layout.y[j], dz = zi - layout.z[j];
+      const Real dx = xi - layout.x[j], dy = yi - layout.y[j], dz = zi - layout.z[j];
       bool touching;
       if constexpr (kDiameters) {
         touching = in_contact(dx, dy, dz, di, layout.d[j]);
@@ -176,7 +190,9 @@ void ContactDetector::detect(const CellGrid& grid, const Layout& layout,
   const bool half = variant.stencil == Stencil::kHalf;
   const bool diameters = layout.d != nullptr;
   const StencilRows stencil = make_stencil(variant.stencil);
-  const double reach_sq = options.diameter * options.diameter;
+  using Real = typename Layout::Real;
+  const Real diameter = static_cast<Real>(options.diameter);
+  const Real reach_sq = diameter * diameter;
 
   if (thread_partners_.size() < static_cast<std::size_t>(threads)) {
     thread_partners_.resize(threads);
@@ -223,7 +239,7 @@ void ContactDetector::detect(const CellGrid& grid, const Layout& layout,
           std::uint32_t cached_key = UINT32_MAX;
 #pragma omp for schedule(runtime) nowait
           for (std::uint32_t h = 0; h < n; ++h) {
-            const auto home = grid.coords_of(layout.x[h], layout.y[h], layout.z[h]);
+            const auto home = grid.coords_of(layout.cell_x[h], layout.cell_y[h], layout.cell_z[h]);
             const std::uint32_t key = grid.key(home[0], home[1], home[2]);
             if (key != cached_key) {
               nb.build(grid, registry_, stencil, home);
@@ -240,7 +256,7 @@ void ContactDetector::detect(const CellGrid& grid, const Layout& layout,
             if (begin == end) continue;
             const std::uint32_t first = layout.particle_at(begin);
             nb.build(grid, registry_, stencil,
-                     grid.coords_of(layout.x[first], layout.y[first], layout.z[first]));
+                     grid.coords_of(layout.cell_x[first], layout.cell_y[first], layout.cell_z[first]));
             for (std::uint32_t s = begin; s < end; ++s) {
               visit(half_tag, diameters_tag, layout.particle_at(s), s);
             }
@@ -332,19 +348,44 @@ CellGrid ContactDetector::prepare(const Scene& scene, const DetectOptions& optio
 DetectRun ContactDetector::run(const Scene& scene, const DetectOptions& options) {
   DetectRun run;
   const CellGrid grid = prepare(scene, options, run);
+  const Scene& source = working_is_sorted_ ? sorted_ : scene;  // coordinates in working order
   const bool diameters = scene.has_diameters();
-  if (working_is_sorted_) {
-    const SortedLayout layout{sorted_.x.data(), sorted_.y.data(), sorted_.z.data(),
-                              diameters ? sorted_.diameter.data() : nullptr};
-    detect(grid, layout, options, run);
+  auto run_with = [&](const auto& coordinates) {
+    if (working_is_sorted_) {
+      using Real = std::remove_cvref_t<decltype(*coordinates.x)>;
+      detect(grid, SortedLayout<Real>{coordinates}, options, run);
+    } else {
+      using Real = std::remove_cvref_t<decltype(*coordinates.x)>;
+      detect(grid,
+             UnsortedLayout<Real>{coordinates, registry_.slot_particle.data(),
+                                  registry_.particle_slot.data()},
+             options, run);
+    }
+  };
+  if (options.variant.precision == Precision::kDouble) {
+    run_with(Coordinates<double>{source.x.data(), source.y.data(), source.z.data(), source.x.data(),
+                                 source.y.data(), source.z.data(),
+                                 diameters ? source.diameter.data() : nullptr});
   } else {
-    const UnsortedLayout layout{scene.x.data(),
-                                scene.y.data(),
-                                scene.z.data(),
-                                diameters ? scene.diameter.data() : nullptr,
-                                registry_.slot_particle.data(),
-                                registry_.particle_slot.data()};
-    detect(grid, layout, options, run);
+    // Single precision: the conversion is part of the setup, as a code keeping float
+    // coordinates would do it once when they change.
+    const double convert_start = omp_get_wtime();
+    const std::size_t n = source.size();
+    narrow_x_.resize(n);
+    narrow_y_.resize(n);
+    narrow_z_.resize(n);
+    narrow_d_.resize(diameters ? n : 0);
+#pragma omp parallel for schedule(static) num_threads(run.threads)
+    for (std::size_t i = 0; i < n; ++i) {
+      narrow_x_[i] = static_cast<float>(source.x[i]);
+      narrow_y_[i] = static_cast<float>(source.y[i]);
+      narrow_z_[i] = static_cast<float>(source.z[i]);
+      if (diameters) narrow_d_[i] = static_cast<float>(source.diameter[i]);
+    }
+    run.setup_s += omp_get_wtime() - convert_start;
+    run_with(Coordinates<float>{source.x.data(), source.y.data(), source.z.data(), narrow_x_.data(),
+                                narrow_y_.data(), narrow_z_.data(),
+                                diameters ? narrow_d_.data() : nullptr});
   }
   return run;
 }

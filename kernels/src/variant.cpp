@@ -15,6 +15,8 @@ constexpr NameTable<LoopKind, 2> kLoops{{{LoopKind::kCell, "cell"}, {LoopKind::k
 constexpr NameTable<Order, 3> kOrders{
     {{Order::kUnsorted, "unsorted"}, {Order::kSorted, "sorted"}, {Order::kMorton, "morton"}}};
 constexpr NameTable<Stencil, 2> kStencils{{{Stencil::kFull, "full"}, {Stencil::kHalf, "half"}}};
+constexpr NameTable<Precision, 2> kPrecisions{
+    {{Precision::kDouble, "double"}, {Precision::kFloat, "float"}}};
 constexpr NameTable<ScheduleKind, 3> kScheduleKinds{{{ScheduleKind::kStatic, "static"},
                                                      {ScheduleKind::kDynamic, "dynamic"},
                                                      {ScheduleKind::kGuided, "guided"}}};
@@ -56,6 +58,7 @@ std::string_view to_string(LoopKind loop) { return name_of(kLoops, loop); }
 std::string_view to_string(Order order) { return name_of(kOrders, order); }
 std::string_view to_string(Stencil stencil) { return name_of(kStencils, stencil); }
 std::string_view to_string(ScheduleKind kind) { return name_of(kScheduleKinds, kind); }
+std::string_view to_string(Precision precision) { return name_of(kPrecisions, precision); }
 
 std::string to_string(const Schedule& schedule) {
   std::string text(to_string(schedule.kind));
@@ -67,13 +70,21 @@ std::string to_string(const Schedule& schedule) {
 }
 
 std::string to_string(const Variant& v) {
-  return std::string(to_string(v.loop)) + "/" + std::string(to_string(v.order)) + "/" +
-         std::string(to_string(v.stencil)) + "/" + to_string(v.schedule);
+  std::string text = std::string(to_string(v.loop)) + "/" + std::string(to_string(v.order)) + "/" +
+                     std::string(to_string(v.stencil)) + "/" + to_string(v.schedule);
+  if (v.precision != Precision::kDouble) {
+    text += '/';
+    text += to_string(v.precision);
+  }
+  return text;
 }
 
 LoopKind parse_loop(std::string_view text) { return parse_name(kLoops, text, "loop"); }
 Order parse_order(std::string_view text) { return parse_name(kOrders, text, "order"); }
 Stencil parse_stencil(std::string_view text) { return parse_name(kStencils, text, "stencil"); }
+Precision parse_precision(std::string_view text) {
+  return parse_name(kPrecisions, text, "precision");
+}
 
 Schedule parse_schedule(std::string_view text) {
   const auto parts = split(text, ',');
@@ -102,16 +113,17 @@ Schedule parse_schedule(std::string_view text) {
 
 Variant parse_variant(std::string_view text) {
   const auto parts = split(text, '/');
-  if (parts.size() != 3 && parts.size() != 4) {
+  if (parts.size() < 3 || parts.size() > 5) {
     throw InputError("variant '" + std::string(text) +
-                     "' must be loop/order/schedule or loop/order/stencil/schedule, "
+                     "' must be loop/order/schedule or loop/order/stencil/schedule[/precision], "
                      "e.g. particle/sorted/static,200");
   }
   Variant variant;
   variant.loop = parse_loop(parts[0]);
   variant.order = parse_order(parts[1]);
-  variant.stencil = parts.size() == 4 ? parse_stencil(parts[2]) : Stencil::kFull;
-  variant.schedule = parse_schedule(parts.back());
+  variant.stencil = parts.size() >= 4 ? parse_stencil(parts[2]) : Stencil::kFull;
+  variant.schedule = parse_schedule(parts.size() >= 4 ? parts[3] : parts[2]);
+  if (parts.size() == 5) variant.precision = parse_precision(parts[4]);
   return variant;
 }
 
@@ -121,7 +133,9 @@ std::vector<Variant> enumerate(const VariantSpace& space) {
     for (const auto order : space.orders) {
       for (const auto stencil : space.stencils) {
         for (const auto& schedule : space.schedules) {
-          variants.push_back(Variant{loop, order, stencil, schedule});
+          for (const auto precision : space.precisions) {
+            variants.push_back(Variant{loop, order, stencil, schedule, precision});
+          }
         }
       }
     }
@@ -132,11 +146,12 @@ std::vector<Variant> enumerate(const VariantSpace& space) {
 std::vector<Variant> paper_variants() {
   const Schedule block{ScheduleKind::kStatic, 0};
   return {
-      {LoopKind::kParticle, Order::kUnsorted, Stencil::kFull, block},                    // Table 2
-      {LoopKind::kCell, Order::kUnsorted, Stencil::kFull, block},                        // Table 3
-      {LoopKind::kParticle, Order::kSorted, Stencil::kFull, block},                      // Table 4
-      {LoopKind::kCell, Order::kSorted, Stencil::kFull, block},                          // Table 5
-      {LoopKind::kParticle, Order::kSorted, Stencil::kFull, {ScheduleKind::kStatic, 200}},  // Table 7
+      {LoopKind::kParticle, Order::kUnsorted, Stencil::kFull, block, Precision::kDouble},  // Table 2
+      {LoopKind::kCell, Order::kUnsorted, Stencil::kFull, block, Precision::kDouble},      // Table 3
+      {LoopKind::kParticle, Order::kSorted, Stencil::kFull, block, Precision::kDouble},    // Table 4
+      {LoopKind::kCell, Order::kSorted, Stencil::kFull, block, Precision::kDouble},        // Table 5
+      {LoopKind::kParticle, Order::kSorted, Stencil::kFull, {ScheduleKind::kStatic, 200},
+       Precision::kDouble},  // Table 7
   };
 }
 
@@ -145,6 +160,8 @@ VariantSpace all_variants(const std::vector<int>& chunks) {
   for (const auto& entry : kLoops) space.loops.push_back(entry.first);
   for (const auto& entry : kOrders) space.orders.push_back(entry.first);
   for (const auto& entry : kStencils) space.stencils.push_back(entry.first);
+  space.precisions.clear();
+  for (const auto& entry : kPrecisions) space.precisions.push_back(entry.first);
   space.schedules.push_back({ScheduleKind::kStatic, 0});
   for (const auto& entry : kScheduleKinds) {
     for (const int chunk : chunks) space.schedules.push_back({entry.first, chunk});

@@ -106,6 +106,7 @@ class ContactDetector {
 
   CellRegistry registry_;
   Scene sorted_;  // coordinates in slot order, for the sorted orders
+  LargeVector<float> narrow_x_, narrow_y_, narrow_z_, narrow_d_;  // single-precision copies
   bool working_is_sorted_ = false;  // working ids are slots (sorted orders) or input rows
   ContactList contacts_;
   // Per-thread partner buffers and per-particle bookkeeping, kept between runs.

@@ -4,15 +4,18 @@
 
 namespace contactlab {
 
-// Equal diameters D: D^2 >= dx^2 + dy^2 + dz^2, with reach_sq = D * D.
-inline bool in_contact(double dx, double dy, double dz, double reach_sq) {
+// Equal diameters D: D^2 >= dx^2 + dy^2 + dz^2, with reach_sq = D * D. Real is double, or
+// float for the single-precision variants.
+template <class Real>
+inline bool in_contact(Real dx, Real dy, Real dz, Real reach_sq) {
   return dx * dx + dy * dy + dz * dz <= reach_sq;
 }
 
 // Diameters d_i, d_j: (d_i + d_j)^2 >= 4 r^2 (eq. (1) squared; the factor 4 is exact).
-inline bool in_contact(double dx, double dy, double dz, double d_i, double d_j) {
-  const double sum = d_i + d_j;
-  return 4.0 * (dx * dx + dy * dy + dz * dz) <= sum * sum;
+template <class Real>
+inline bool in_contact(Real dx, Real dy, Real dz, Real d_i, Real d_j) {
+  const Real sum = d_i + d_j;
+  return Real(4) * (dx * dx + dy * dy + dz * dz) <= sum * sum;
 }
 
 }  // namespace contactlab

@@ -1,7 +1,8 @@
 // A contact-detection variant as a value: what the CLI parses, the tuner enumerates, the
-// benchmarks register and the tests iterate. Canonical text form: loop/order/stencil/schedule,
-// e.g. "particle/sorted/full/static,200"; the three-part "loop/order/schedule" means the
-// paper's full stencil.
+// benchmarks register and the tests iterate. Canonical text form:
+// loop/order/stencil/schedule[/float], e.g. "particle/sorted/full/static,200"; the three-part
+// "loop/order/schedule" means the paper's full stencil, a fifth part "float" single
+// precision (double when absent).
 #pragma once
 
 #include <string>
@@ -24,6 +25,11 @@ enum class Stencil { kFull, kHalf };
 
 enum class ScheduleKind { kStatic, kDynamic, kGuided };
 
+// Arithmetic of the pair test: double (exact reference) or float (coordinates rounded to
+// single precision: faster where memory bound, but pairs within a few float ulps of D can be
+// misjudged; the tuner counts those errors and never picks such a variant without a tolerance).
+enum class Precision { kDouble, kFloat };
+
 struct Schedule {
   ScheduleKind kind = ScheduleKind::kStatic;
   // Iterations per chunk. 0 only with static: plain block partition (one chunk per thread).
@@ -36,6 +42,7 @@ struct Variant {
   Order order = Order::kSorted;
   Stencil stencil = Stencil::kFull;
   Schedule schedule;
+  Precision precision = Precision::kDouble;
   friend bool operator==(const Variant&, const Variant&) = default;
 };
 
@@ -43,13 +50,15 @@ std::string_view to_string(LoopKind loop);
 std::string_view to_string(Order order);
 std::string_view to_string(Stencil stencil);
 std::string_view to_string(ScheduleKind kind);
+std::string_view to_string(Precision precision);
 std::string to_string(const Schedule& schedule);  // "static", "static,200", "dynamic,4"
-std::string to_string(const Variant& variant);    // always the four-part canonical form
+std::string to_string(const Variant& variant);    // four parts, a fifth only for float
 
 // Parsers throw InputError with a one-line message naming the bad part and the choices.
 LoopKind parse_loop(std::string_view text);
 Order parse_order(std::string_view text);
 Stencil parse_stencil(std::string_view text);
+Precision parse_precision(std::string_view text);
 Schedule parse_schedule(std::string_view text);  // "dynamic" alone means "dynamic,1"
 Variant parse_variant(std::string_view text);
 
@@ -59,6 +68,7 @@ struct VariantSpace {
   std::vector<Order> orders;
   std::vector<Stencil> stencils;
   std::vector<Schedule> schedules;
+  std::vector<Precision> precisions{Precision::kDouble};
 };
 
 std::vector<Variant> enumerate(const VariantSpace& space);
@@ -66,8 +76,8 @@ std::vector<Variant> enumerate(const VariantSpace& space);
 // The five configurations of Takagi et al. (Tables 2-5 and 7; chunk 200 for Table 7).
 std::vector<Variant> paper_variants();
 
-// Every loop, order and stencil with the schedules static, static,k, dynamic,k and guided,k
-// for each k in `chunks`.
+// Every loop, order, stencil and precision with the schedules static, static,k, dynamic,k
+// and guided,k for each k in `chunks`.
 VariantSpace all_variants(const std::vector<int>& chunks);
 
 }  // namespace contactlab
