@@ -1,0 +1,280 @@
+// The median interval, and the chunk search on synthetic noisy cost functions of log2 k with
+// a fixed-seed generator: it finds the known optimum with far fewer evaluations than the
+// exhaustive sweep, prefers the larger chunk among ties, and honours its budget.
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <functional>
+#include <stdexcept>
+#include <thread>
+#include <vector>
+
+#include "contactlab/kernels/rng.hpp"
+#include "contactlab/tuner/chunk_search.hpp"
+
+namespace contactlab::tuner {
+namespace {
+
+TEST(SampleMedian, OddAndEvenCounts) {
+  EXPECT_DOUBLE_EQ(sample_median(std::vector<double>{3, 1, 2}), 2.0);
+  EXPECT_DOUBLE_EQ(sample_median(std::vector<double>{4, 1, 3, 2}), 2.5);
+  EXPECT_THROW(sample_median(std::vector<double>{}), std::invalid_argument);
+}
+
+TEST(MedianConfidenceInterval, UsesBinomialOrderStatistics) {
+  // n = 10: P(B <= 0) = 1/1024, P(B <= 1) = 11/1024, P(B <= 2) = 56/1024.
+  // l = 2: coverage 1 - 22/1024 = 0.9785 >= 0.95; l = 3: 1 - 112/1024 = 0.89 < 0.95.
+  const std::vector<double> ten = {10, 9, 8, 7, 6, 5, 4, 3, 2, 1};
+  const MedianConfidenceInterval interval = median_confidence_interval(ten);
+  EXPECT_EQ(interval.low_rank, 2u);
+  EXPECT_EQ(interval.high_rank, 9u);
+  EXPECT_DOUBLE_EQ(interval.low_seconds, 2.0);
+  EXPECT_DOUBLE_EQ(interval.high_seconds, 9.0);
+  EXPECT_DOUBLE_EQ(interval.median_seconds, 5.5);
+  EXPECT_NEAR(interval.coverage, 1.0 - 22.0 / 1024.0, 1e-12);
+  // At 80% the interval narrows to l = 3 (coverage 0.89).
+  EXPECT_EQ(median_confidence_interval(ten, 0.8).low_rank, 3u);
+}
+
+TEST(MedianConfidenceInterval, SmallSamplesFallBackToTheRangeWithTheirTrueCoverage) {
+  // n = 5: [min, max] covers with 1 - 2/32 = 0.9375 < 0.95; n = 6: 1 - 2/64 = 0.96875.
+  const MedianConfidenceInterval five =
+      median_confidence_interval(std::vector<double>{1, 2, 3, 4, 5});
+  EXPECT_EQ(five.low_rank, 1u);
+  EXPECT_EQ(five.high_rank, 5u);
+  EXPECT_NEAR(five.coverage, 0.9375, 1e-12);
+  EXPECT_NEAR(median_confidence_interval(std::vector<double>{1, 2, 3, 4, 5, 6}).coverage, 0.96875,
+              1e-12);
+  const MedianConfidenceInterval one = median_confidence_interval(std::vector<double>{7});
+  EXPECT_DOUBLE_EQ(one.low_seconds, 7.0);
+  EXPECT_DOUBLE_EQ(one.high_seconds, 7.0);
+  EXPECT_DOUBLE_EQ(one.coverage, 0.0);
+  EXPECT_THROW(median_confidence_interval(std::vector<double>{}), std::invalid_argument);
+  EXPECT_THROW(median_confidence_interval(std::vector<double>{1}, 1.0), std::invalid_argument);
+}
+
+TEST(MedianConfidenceInterval, LargeSamplesDoNotUnderflow) {
+  std::vector<double> samples(2000);
+  for (std::size_t i = 0; i < samples.size(); ++i) samples[i] = static_cast<double>(i);
+  const MedianConfidenceInterval interval = median_confidence_interval(samples);
+  EXPECT_GE(interval.coverage, 0.95);
+  EXPECT_LT(interval.coverage, 0.96);
+  // Normal approximation: n/2 -+ 1.96 sqrt(n)/2 = 1000 -+ 43.8.
+  EXPECT_NEAR(static_cast<double>(interval.low_rank), 956.0, 2.0);
+  EXPECT_EQ(interval.low_rank + interval.high_rank, 2001u);
+}
+
+// Gaussian-like noise from a fixed-seed generator: the sum of 12 uniforms minus 6 has mean 0
+// and variance 1 (Irwin-Hall).
+class Noise {
+ public:
+  explicit Noise(std::uint64_t seed) : rng_(seed) {}
+  double next() {
+    double sum = 0.0;
+    for (int i = 0; i < 12; ++i) sum += static_cast<double>(rng_.next() >> 11) * 0x1.0p-53;
+    return sum - 6.0;
+  }
+
+ private:
+  Xoshiro256 rng_;
+};
+
+// A measured loop whose true time is `seconds(log2 k)`, with 1% multiplicative noise; nine
+// samples per call. Counts the calls.
+struct SyntheticLoop {
+  std::function<double(double)> seconds;
+  Noise noise{20240611};
+  int calls = 0;
+  double relative_noise = 0.01;
+
+  MeasureChunk measure() {
+    return [this](int chunk) {
+      ++calls;
+      std::vector<double> samples;
+      const double truth = seconds(std::log2(static_cast<double>(chunk)));
+      for (int i = 0; i < 9; ++i) samples.push_back(truth * (1.0 + relative_noise * noise.next()));
+      return samples;
+    };
+  }
+};
+
+// Convex in log2 k with the optimum at k = 256; neighbours on the grid are 5% slower.
+double convex(double log2_chunk) {
+  return 1e-3 * (1.0 + 0.05 * (log2_chunk - 8) * (log2_chunk - 8));
+}
+
+// Flat from k = 256 to k = 4096, rising on both sides.
+double plateau(double log2_chunk) {
+  const double below = std::max(0.0, 8.0 - log2_chunk), above = std::max(0.0, log2_chunk - 12.0);
+  return 1e-3 * (1.0 + 0.05 * (below * below + above * above));
+}
+
+TEST(SearchChunk, FindsTheOptimumFromTheModelSeedWithFewEvaluations) {
+  SyntheticLoop loop{convex};
+  ChunkSearchOptions options;
+  options.seed_chunk = 64;  // a model off by two grid steps
+  const ChunkSearchResult search = search_chunk(loop.measure(), options);
+  EXPECT_EQ(search.chosen_chunk, 256);
+  EXPECT_EQ(search.fastest_chunk, 256);
+  EXPECT_EQ(search.evaluations, loop.calls);
+  EXPECT_EQ(search.stop, SearchStop::kConverged);
+
+  SyntheticLoop sweep_loop{convex};
+  const ChunkSearchResult exhaustive = exhaustive_chunk_sweep(sweep_loop.measure(), options);
+  EXPECT_EQ(exhaustive.evaluations, 17);
+  EXPECT_EQ(exhaustive.chosen_chunk, 256);
+  // Seed 64, neighbours 32 and 128, then 512 and 256; at most 8 of 17 whichever way the noise
+  // tips the near-tie between 128 and 512.
+  EXPECT_LE(search.evaluations, 8);
+  EXPECT_DOUBLE_EQ(regret(exhaustive, search.chosen_chunk), 0.0);
+  EXPECT_EQ(search.measured.front().samples_seconds.size(), 9u);
+  EXPECT_GT(search.sampled_seconds, 0.0);
+  EXPECT_GE(search.measuring_seconds, 0.0);
+}
+
+TEST(SearchChunk, FindsTheOptimumFromEitherEdgeOfTheGrid) {
+  for (const int seed : {1, 65536}) {
+    SyntheticLoop loop{convex};
+    ChunkSearchOptions options;
+    options.seed_chunk = seed;
+    const ChunkSearchResult search = search_chunk(loop.measure(), options);
+    EXPECT_EQ(search.chosen_chunk, 256) << "seed " << seed;
+    EXPECT_LT(search.evaluations, 17) << "seed " << seed;
+  }
+}
+
+TEST(SearchChunk, PrefersTheLargestChunkAmongTies) {
+  SyntheticLoop loop{plateau};
+  ChunkSearchOptions options;
+  options.seed_chunk = 256;
+  const ChunkSearchResult search = search_chunk(loop.measure(), options);
+  // Every chunk from 256 to 4096 is as fast within the noise: the largest wins.
+  EXPECT_EQ(search.chosen_chunk, 4096);
+  EXPECT_GE(search.fastest_chunk, 256);
+  EXPECT_LE(search.fastest_chunk, 4096);
+  SyntheticLoop sweep_loop{plateau};
+  const ChunkSearchResult exhaustive = exhaustive_chunk_sweep(sweep_loop.measure(), options);
+  EXPECT_EQ(exhaustive.chosen_chunk, 4096);
+  EXPECT_LT(search.evaluations, exhaustive.evaluations);
+  EXPECT_LT(std::abs(regret(exhaustive, search.chosen_chunk)), 0.02);
+}
+
+TEST(SearchChunk, ConfirmationRoundsAddSamplesToTheContenders) {
+  SyntheticLoop loop{plateau};
+  ChunkSearchOptions options;
+  options.seed_chunk = 256;
+  options.confirmation_rounds = 1;
+  const ChunkSearchResult search = search_chunk(loop.measure(), options);
+  EXPECT_EQ(search.chosen_chunk, 4096);
+  EXPECT_EQ(search.at(4096).evaluations, 2);
+  EXPECT_EQ(search.at(4096).samples_seconds.size(), 18u);
+  EXPECT_THROW(search.at(3), std::invalid_argument);
+}
+
+TEST(SearchChunk, StopsAtTheEvaluationBudget) {
+  SyntheticLoop loop{convex};
+  ChunkSearchOptions options;
+  options.seed_chunk = 1;
+  options.budget.max_evaluations = 3;
+  const ChunkSearchResult search = search_chunk(loop.measure(), options);
+  EXPECT_EQ(search.evaluations, 3);
+  EXPECT_EQ(loop.calls, 3);
+  EXPECT_EQ(search.stop, SearchStop::kEvaluationBudget);
+  EXPECT_EQ(search.measured.size(), 3u);
+  EXPECT_NO_THROW(search.at(search.chosen_chunk));
+}
+
+TEST(SearchChunk, StopsAtTheTimeBudget) {
+  int calls = 0;
+  const MeasureChunk slow = [&calls](int chunk) {
+    ++calls;
+    std::this_thread::sleep_for(std::chrono::milliseconds(3));
+    return std::vector<double>(6, convex(std::log2(static_cast<double>(chunk))));
+  };
+  ChunkSearchOptions options;
+  options.seed_chunk = 1;
+  options.budget.max_measure_seconds = 0.005;  // two calls of at least 3 ms use it up
+  const ChunkSearchResult search = search_chunk(slow, options);
+  EXPECT_EQ(search.stop, SearchStop::kTimeBudget);
+  EXPECT_LE(search.evaluations, 2);
+  EXPECT_GE(search.evaluations, 1);
+  EXPECT_GE(search.measuring_seconds, 0.005);
+}
+
+TEST(SearchChunk, SeededByTheScheduleModel) {
+  // The "machine" is the schedule model itself plus noise; its own prediction as the seed
+  // lands on the optimum at once.
+  std::vector<std::uint32_t> work(4000, 2);
+  work.insert(work.end(), 1000, 60);
+  MachineCosts costs;
+  const int threads = 4;
+  const ChunkPrediction prediction =
+      predict_best_chunk(work, threads, ScheduleKind::kStatic, costs, log2_chunk_grid());
+  Noise noise(7);
+  const MeasureChunk measure = [&](int chunk) {
+    const double truth =
+        simulate_schedule(work, threads, {ScheduleKind::kStatic, chunk}, costs).makespan_seconds;
+    std::vector<double> samples;
+    for (int i = 0; i < 9; ++i) samples.push_back(truth * (1.0 + 0.002 * noise.next()));
+    return samples;
+  };
+  ChunkSearchOptions options;
+  options.seed_chunk = prediction.best_chunk;
+  const ChunkSearchResult search = search_chunk(measure, options);
+  const ChunkSearchResult exhaustive = exhaustive_chunk_sweep(measure, options);
+  EXPECT_LE(search.evaluations, 5);
+  EXPECT_LT(regret(exhaustive, search.chosen_chunk), 0.01);
+  EXPECT_GE(search.chosen_chunk, prediction.best_chunk);
+}
+
+TEST(SearchChunk, HandlesGridsOfOneAndTwoChunks) {
+  SyntheticLoop loop{convex};
+  ChunkSearchOptions options;
+  options.grid = {64};
+  const ChunkSearchResult one = search_chunk(loop.measure(), options);
+  EXPECT_EQ(one.chosen_chunk, 64);
+  EXPECT_EQ(one.evaluations, 1);
+  options.grid = {128, 256};
+  options.seed_chunk = 1;  // nearest grid point: 128
+  const ChunkSearchResult two = search_chunk(loop.measure(), options);
+  EXPECT_EQ(two.chosen_chunk, 256);
+  EXPECT_EQ(two.evaluations, 2);
+}
+
+TEST(SearchChunk, RejectsBadOptionsAndSamples) {
+  SyntheticLoop loop{convex};
+  ChunkSearchOptions options;
+  options.grid = {1, 4, 2};
+  EXPECT_THROW(search_chunk(loop.measure(), options), std::invalid_argument);
+  options.grid = {};
+  EXPECT_THROW(exhaustive_chunk_sweep(loop.measure(), options), std::invalid_argument);
+  options = {};
+  options.budget.max_evaluations = 0;
+  EXPECT_THROW(search_chunk(loop.measure(), options), std::invalid_argument);
+  options = {};
+  const MeasureChunk nothing = [](int) { return std::vector<double>{}; };
+  try {
+    search_chunk(nothing, options);
+    FAIL() << "no exception";
+  } catch (const std::invalid_argument& error) {
+    EXPECT_EQ(std::string(error.what()).rfind("search_chunk: measure(", 0), 0u) << error.what();
+  }
+  const MeasureChunk not_a_number = [](int) { return std::vector<double>{std::nan("")}; };
+  EXPECT_THROW(search_chunk(not_a_number, options), std::invalid_argument);
+}
+
+TEST(Regret, IsTheRelativeExcessOverTheBest) {
+  EXPECT_NEAR(regret(1.1, 1.0), 0.1, 1e-12);
+  EXPECT_DOUBLE_EQ(regret(2.0, 2.0), 0.0);
+  EXPECT_THROW(regret(1.0, 0.0), std::invalid_argument);
+  SyntheticLoop loop{convex};
+  const ChunkSearchResult exhaustive = exhaustive_chunk_sweep(loop.measure(), ChunkSearchOptions{});
+  // k = 1024 is two grid steps from the optimum: 1 + 0.05 * 4 = 20% slower, within the noise.
+  EXPECT_NEAR(regret(exhaustive, 1024), 0.2, 0.03);
+  EXPECT_THROW(regret(exhaustive, 3), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace contactlab::tuner

@@ -1,0 +1,152 @@
+// Calibration recovers known MachineCosts from synthetic timed runs made with the model
+// itself: exactly without noise, closely with noise, and undisturbed by one bad run.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cstdint>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "contactlab/kernels/rng.hpp"
+#include "contactlab/tuner/cost_calibration.hpp"
+
+namespace contactlab::tuner {
+namespace {
+
+// Distinct from the defaults, so that a fit that stays at its starting point fails.
+MachineCosts true_costs() {
+  MachineCosts costs;
+  costs.seconds_per_test = 1.5e-9;
+  costs.seconds_per_iteration = 3e-8;
+  costs.seconds_per_static_chunk = 8e-9;
+  costs.seconds_per_grab = 3e-7;
+  costs.seconds_per_stream_break = 2e-7;
+  costs.seconds_per_cold_test = 5e-9;
+  costs.seconds_per_region = 1e-5;
+  return costs;
+}
+
+double uniform(Xoshiro256& rng) { return static_cast<double>(rng.next() >> 11) * 0x1.0p-53; }
+
+// Particle loop over cells of 1 to 40 particles, each testing its cell partners.
+std::vector<std::uint32_t> particle_loop_work() {
+  Xoshiro256 rng(11);
+  std::vector<std::uint32_t> work;
+  while (work.size() < 4000) {
+    const auto size = static_cast<std::uint32_t>(1 + rng.next() % 40);
+    work.insert(work.end(), size, size - 1);
+  }
+  return work;
+}
+
+// Cell loop: most cells empty, a few heavy.
+std::vector<std::uint32_t> cell_loop_work() {
+  Xoshiro256 rng(12);
+  std::vector<std::uint32_t> work(3000, 0);
+  for (auto& tests : work) {
+    if (uniform(rng) < 0.4) tests = static_cast<std::uint32_t>(rng.next() % 5000);
+  }
+  return work;
+}
+
+struct Synthetic {
+  std::vector<std::vector<std::uint32_t>> works;
+  std::vector<TimedRun> runs;
+};
+
+Synthetic synthetic_runs(const MachineCosts& costs, const std::vector<Schedule>& schedules) {
+  Synthetic synthetic;
+  synthetic.works = {particle_loop_work(), cell_loop_work()};
+  for (const auto& work : synthetic.works) {
+    for (const int threads : {1, 2, 4}) {
+      for (const Schedule& schedule : schedules) {
+        const double seconds = simulate_schedule(work, threads, schedule, costs).makespan_seconds;
+        synthetic.runs.push_back({work, threads, schedule, seconds});
+      }
+    }
+  }
+  return synthetic;
+}
+
+std::vector<Schedule> every_kind() {
+  return {{ScheduleKind::kStatic, 0},  {ScheduleKind::kStatic, 1},  {ScheduleKind::kStatic, 4},
+          {ScheduleKind::kStatic, 16}, {ScheduleKind::kStatic, 64}, {ScheduleKind::kStatic, 256},
+          {ScheduleKind::kDynamic, 1}, {ScheduleKind::kDynamic, 8}, {ScheduleKind::kDynamic, 64},
+          {ScheduleKind::kGuided, 1},  {ScheduleKind::kGuided, 16}};
+}
+
+void expect_costs_near(const MachineCosts& fitted, const MachineCosts& truth, double relative) {
+  EXPECT_NEAR(fitted.seconds_per_test, truth.seconds_per_test, relative * truth.seconds_per_test);
+  EXPECT_NEAR(fitted.seconds_per_iteration, truth.seconds_per_iteration,
+              relative * truth.seconds_per_iteration);
+  EXPECT_NEAR(fitted.seconds_per_static_chunk, truth.seconds_per_static_chunk,
+              relative * truth.seconds_per_static_chunk);
+  EXPECT_NEAR(fitted.seconds_per_grab, truth.seconds_per_grab, relative * truth.seconds_per_grab);
+  EXPECT_NEAR(fitted.seconds_per_stream_break, truth.seconds_per_stream_break,
+              relative * truth.seconds_per_stream_break);
+  EXPECT_NEAR(fitted.seconds_per_cold_test, truth.seconds_per_cold_test,
+              relative * truth.seconds_per_cold_test);
+  EXPECT_NEAR(fitted.seconds_per_region, truth.seconds_per_region,
+              relative * truth.seconds_per_region);
+}
+
+TEST(CalibrateCosts, RecoversKnownConstantsExactly) {
+  const Synthetic synthetic = synthetic_runs(true_costs(), every_kind());
+  const CalibrationResult result = calibrate_costs(synthetic.runs);
+  expect_costs_near(result.costs, true_costs(), 1e-6);
+  EXPECT_LT(result.rms_relative_error, 1e-9);
+  EXPECT_TRUE(result.unidentified.empty());
+  EXPECT_GE(result.rounds, 1);
+}
+
+TEST(CalibrateCosts, StaysCloseUnderMeasurementNoise) {
+  Synthetic synthetic = synthetic_runs(true_costs(), every_kind());
+  Xoshiro256 rng(99);
+  for (TimedRun& run : synthetic.runs) run.seconds *= 1.0 + 0.02 * (2.0 * uniform(rng) - 1.0);
+  const CalibrationResult result = calibrate_costs(synthetic.runs);
+  EXPECT_LT(result.rms_relative_error, 0.02);
+  // The constants that carry most of the time are pinned down well.
+  EXPECT_NEAR(result.costs.seconds_per_test, true_costs().seconds_per_test,
+              0.05 * true_costs().seconds_per_test);
+  EXPECT_NEAR(result.costs.seconds_per_grab, true_costs().seconds_per_grab,
+              0.2 * true_costs().seconds_per_grab);
+}
+
+TEST(CalibrateCosts, OneDisturbedRunDoesNotDragTheFit) {
+  Synthetic synthetic = synthetic_runs(true_costs(), every_kind());
+  synthetic.runs[5].seconds *= 3.0;  // e.g. another program took the cores during that run
+  const CalibrationResult result = calibrate_costs(synthetic.runs);
+  expect_costs_near(result.costs, true_costs(), 0.05);
+  EXPECT_GT(result.max_relative_error, 0.5);  // the disturbed run stands out
+}
+
+TEST(CalibrateCosts, ConstantsNoRunExercisesKeepTheFallback) {
+  const Synthetic synthetic = synthetic_runs(
+      true_costs(),
+      {{ScheduleKind::kStatic, 0}, {ScheduleKind::kStatic, 4}, {ScheduleKind::kStatic, 64}});
+  MachineCosts fallback;
+  fallback.seconds_per_grab = 4.2e-7;
+  const CalibrationResult result = calibrate_costs(synthetic.runs, fallback);
+  EXPECT_EQ(result.unidentified, (std::vector<std::string>{"seconds_per_grab"}));
+  EXPECT_DOUBLE_EQ(result.costs.seconds_per_grab, 4.2e-7);
+  EXPECT_LT(result.rms_relative_error, 1e-6);
+}
+
+TEST(CalibrateCosts, RejectsBadRuns) {
+  EXPECT_THROW(calibrate_costs(std::vector<TimedRun>{}), std::invalid_argument);
+  const std::vector<std::uint32_t> work(10, 1);
+  try {
+    calibrate_costs(std::vector<TimedRun>{{work, 2, {ScheduleKind::kStatic, 0}, 0.0}});
+    FAIL() << "no exception";
+  } catch (const std::invalid_argument& error) {
+    EXPECT_EQ(std::string(error.what()).rfind("calibrate_costs: run 0", 0), 0u) << error.what();
+  }
+  EXPECT_THROW(calibrate_costs(std::vector<TimedRun>{{work, 0, {ScheduleKind::kStatic, 0}, 1.0}}),
+               std::invalid_argument);
+  EXPECT_THROW(calibrate_costs(std::vector<TimedRun>{{work, 2, {ScheduleKind::kGuided, 0}, 1.0}}),
+               std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace contactlab::tuner

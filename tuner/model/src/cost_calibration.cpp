@@ -1,0 +1,286 @@
+#include "contactlab/tuner/cost_calibration.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <optional>
+#include <stdexcept>
+
+namespace contactlab::tuner {
+
+namespace {
+
+constexpr std::size_t kConstants = 7;
+using Vector = std::array<double, kConstants>;
+
+constexpr std::array<const char*, kConstants> kConstantNames = {
+    "seconds_per_region",       "seconds_per_test", "seconds_per_iteration",
+    "seconds_per_static_chunk", "seconds_per_grab", "seconds_per_stream_break",
+    "seconds_per_cold_test"};
+
+Vector to_vector(const MachineCosts& costs) {
+  return {costs.seconds_per_region,       costs.seconds_per_test, costs.seconds_per_iteration,
+          costs.seconds_per_static_chunk, costs.seconds_per_grab, costs.seconds_per_stream_break,
+          costs.seconds_per_cold_test};
+}
+
+MachineCosts to_costs(const Vector& v) {
+  MachineCosts costs;
+  costs.seconds_per_region = v[0];
+  costs.seconds_per_test = v[1];
+  costs.seconds_per_iteration = v[2];
+  costs.seconds_per_static_chunk = v[3];
+  costs.seconds_per_grab = v[4];
+  costs.seconds_per_stream_break = v[5];
+  costs.seconds_per_cold_test = v[6];
+  return costs;
+}
+
+// The coefficients of the constants in the loop time when `share` is the slowest thread.
+Vector features(const ThreadShare& share, bool self_scheduled) {
+  return {1.0,
+          static_cast<double>(share.tests),
+          static_cast<double>(share.iterations),
+          self_scheduled ? 0.0 : static_cast<double>(share.chunks),
+          static_cast<double>(share.grabs),
+          static_cast<double>(share.stream_breaks),
+          static_cast<double>(share.cold_tests)};
+}
+
+// Least squares min |A x - b| over the columns in `columns` by Householder QR; nullopt when
+// those columns are (numerically) dependent. A is row-major, rows x kConstants.
+std::optional<std::vector<double>> least_squares(const std::vector<Vector>& a,
+                                                 const std::vector<double>& b,
+                                                 const std::vector<std::size_t>& columns) {
+  const std::size_t m = a.size(), n = columns.size();
+  if (n == 0 || m < n) return std::nullopt;
+  std::vector<std::vector<double>> r(n, std::vector<double>(m));  // column-major copy
+  for (std::size_t j = 0; j < n; ++j) {
+    for (std::size_t i = 0; i < m; ++i) r[j][i] = a[i][columns[j]];
+  }
+  std::vector<double> y = b;
+  std::vector<double> norms(n);
+  for (std::size_t j = 0; j < n; ++j) {
+    double s = 0.0;
+    for (const double value : r[j]) s += value * value;
+    norms[j] = std::sqrt(s);
+  }
+  for (std::size_t k = 0; k < n; ++k) {
+    double alpha = 0.0;
+    for (std::size_t i = k; i < m; ++i) alpha += r[k][i] * r[k][i];
+    alpha = std::sqrt(alpha);
+    // A column that keeps almost nothing of its norm after the earlier reflections lies in the
+    // span of the earlier columns.
+    if (alpha <= 1e-9 * norms[k]) return std::nullopt;
+    if (r[k][k] > 0) alpha = -alpha;
+    std::vector<double> v(m, 0.0);
+    for (std::size_t i = k; i < m; ++i) v[i] = r[k][i];
+    v[k] -= alpha;
+    double vv = 0.0;
+    for (std::size_t i = k; i < m; ++i) vv += v[i] * v[i];
+    if (vv == 0.0) continue;
+    auto reflect = [&](std::vector<double>& column) {
+      double dot = 0.0;
+      for (std::size_t i = k; i < m; ++i) dot += v[i] * column[i];
+      const double factor = 2.0 * dot / vv;
+      for (std::size_t i = k; i < m; ++i) column[i] -= factor * v[i];
+    };
+    for (std::size_t j = k; j < n; ++j) reflect(r[j]);
+    reflect(y);
+  }
+  std::vector<double> x(n, 0.0);
+  for (std::size_t kk = n; kk-- > 0;) {
+    double s = y[kk];
+    for (std::size_t j = kk + 1; j < n; ++j) s -= r[j][kk] * x[j];
+    x[kk] = s / r[kk][kk];
+  }
+  return x;
+}
+
+// Non-negative least squares by enumeration of the supports: the NNLS optimum is the
+// unconstrained fit on its support, and with at most 7 constants the 127 supports are cheap
+// and the answer exact (no active-set cycling to guard against).
+Vector nonnegative_least_squares(const std::vector<Vector>& a, const std::vector<double>& b,
+                                 const std::array<bool, kConstants>& usable) {
+  std::vector<std::size_t> usable_columns;
+  for (std::size_t j = 0; j < kConstants; ++j) {
+    if (usable[j]) usable_columns.push_back(j);
+  }
+  // Columns scaled to unit largest entry, so that tests (~1e6) and the region (1) compare.
+  std::array<double, kConstants> scale{};
+  scale.fill(1.0);
+  std::vector<Vector> scaled = a;
+  for (const std::size_t j : usable_columns) {
+    double largest = 0.0;
+    for (const Vector& row : a) largest = std::max(largest, std::abs(row[j]));
+    scale[j] = largest > 0.0 ? largest : 1.0;
+    for (Vector& row : scaled) row[j] /= scale[j];
+  }
+  Vector best{};
+  double best_residual = 0.0;
+  for (const double value : b) best_residual += value * value;  // the all-zero fit
+  const std::size_t subsets = std::size_t{1} << usable_columns.size();
+  for (std::size_t mask = 1; mask < subsets; ++mask) {
+    std::vector<std::size_t> columns;
+    for (std::size_t bit = 0; bit < usable_columns.size(); ++bit) {
+      if (mask & (std::size_t{1} << bit)) columns.push_back(usable_columns[bit]);
+    }
+    const auto solution = least_squares(scaled, b, columns);
+    if (!solution ||
+        std::any_of(solution->begin(), solution->end(), [](double x) { return x < 0.0; })) {
+      continue;
+    }
+    double residual = 0.0;
+    for (std::size_t i = 0; i < scaled.size(); ++i) {
+      double predicted = 0.0;
+      for (std::size_t c = 0; c < columns.size(); ++c) {
+        predicted += scaled[i][columns[c]] * (*solution)[c];
+      }
+      residual += (predicted - b[i]) * (predicted - b[i]);
+    }
+    if (residual < best_residual * (1.0 - 1e-12)) {
+      best_residual = residual;
+      best.fill(0.0);
+      for (std::size_t c = 0; c < columns.size(); ++c) {
+        best[columns[c]] = (*solution)[c] / scale[columns[c]];
+      }
+    }
+  }
+  return best;
+}
+
+double median_of(std::vector<double> values) {
+  if (values.empty()) return 0.0;
+  const std::size_t middle = values.size() / 2;
+  std::nth_element(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(middle),
+                   values.end());
+  double upper = values[middle];
+  if (values.size() % 2 == 1) return upper;
+  const double lower =
+      *std::max_element(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(middle));
+  return 0.5 * (lower + upper);
+}
+
+struct Errors {
+  double rms = 0.0;
+  double max = 0.0;
+};
+
+}  // namespace
+
+CalibrationResult calibrate_costs(std::span<const TimedRun> runs, const MachineCosts& fallback) {
+  if (runs.empty()) throw std::invalid_argument("calibrate_costs: no timed runs");
+  for (std::size_t i = 0; i < runs.size(); ++i) {
+    const TimedRun& run = runs[i];
+    if (run.threads < 1 || !std::isfinite(run.seconds) || run.seconds <= 0.0) {
+      throw std::invalid_argument("calibrate_costs: run " + std::to_string(i) +
+                                  " has threads = " + std::to_string(run.threads) +
+                                  ", seconds = " + std::to_string(run.seconds) +
+                                  " (need threads >= 1 and seconds > 0)");
+    }
+    const Schedule& s = run.schedule;
+    if (s.chunk < 0 || (s.kind != ScheduleKind::kStatic && s.chunk == 0)) {
+      throw std::invalid_argument("calibrate_costs: run " + std::to_string(i) + " has schedule " +
+                                  std::string(to_string(s.kind)) + "," + std::to_string(s.chunk));
+    }
+  }
+
+  constexpr int kMaxRounds = 30;
+  constexpr int kStaleRounds = 4;  // stop when this many fits in a row bring no improvement
+  constexpr int kHuberPasses = 6;
+  constexpr double kHuberTuning = 1.345;  // 95% efficiency at the normal distribution
+
+  const Vector fallback_vector = to_vector(fallback);
+  Vector current = fallback_vector;  // the costs the critical threads are found under
+  CalibrationResult result;
+  result.costs = fallback;
+  Errors best_errors{std::numeric_limits<double>::infinity(), 0.0};
+  std::array<bool, kConstants> identified{};
+  int stale = 0;
+  bool settled = false;
+
+  // Round r simulates every run once under `current`: that scores the previous fit and gives
+  // the critical threads for the next one.
+  for (int round = 0;; ++round) {
+    // Rows: the critical thread's coefficients, divided by the measured time so that the fit
+    // minimises relative errors.
+    std::vector<Vector> rows;
+    Errors errors;
+    identified.fill(false);
+    for (const TimedRun& run : runs) {
+      const ScheduleOutcome outcome =
+          simulate_schedule(run.work, run.threads, run.schedule, to_costs(current));
+      const double error = (outcome.makespan_seconds - run.seconds) / run.seconds;
+      errors.rms += error * error;
+      errors.max = std::max(errors.max, std::abs(error));
+      const auto critical = std::max_element(
+          outcome.threads.begin(), outcome.threads.end(),
+          [](const ThreadShare& a, const ThreadShare& b) { return a.seconds < b.seconds; });
+      Vector row = features(*critical, outcome.self_scheduled);
+      for (std::size_t j = 0; j < kConstants; ++j) {
+        identified[j] = identified[j] || row[j] != 0.0;
+        row[j] /= run.seconds;
+      }
+      rows.push_back(row);
+    }
+    errors.rms = std::sqrt(errors.rms / static_cast<double>(runs.size()));
+    if (round > 0) {  // `current` is a fit: keep the best one
+      if (errors.rms < best_errors.rms * (1.0 - 1e-9)) {
+        best_errors = errors;
+        result.costs = to_costs(current);
+        stale = 0;
+      } else {
+        ++stale;
+      }
+    }
+    if (settled || stale >= kStaleRounds || round == kMaxRounds) break;
+
+    std::vector<double> weights(runs.size(), 1.0);
+    const std::vector<double> ones(runs.size(), 1.0);
+    Vector fitted{};
+    for (int pass = 0; pass < kHuberPasses; ++pass) {
+      std::vector<Vector> weighted = rows;
+      std::vector<double> targets = ones;
+      for (std::size_t i = 0; i < rows.size(); ++i) {
+        const double root = std::sqrt(weights[i]);
+        for (double& value : weighted[i]) value *= root;
+        targets[i] *= root;
+      }
+      fitted = nonnegative_least_squares(weighted, targets, identified);
+      std::vector<double> residuals(rows.size());
+      for (std::size_t i = 0; i < rows.size(); ++i) {
+        double predicted = 0.0;
+        for (std::size_t j = 0; j < kConstants; ++j) predicted += rows[i][j] * fitted[j];
+        residuals[i] = std::abs(predicted - 1.0);
+      }
+      // Robust scale: the median absolute residual, as a normal sigma.
+      const double sigma = 1.4826 * median_of(residuals);
+      if (sigma <= 1e-12) break;
+      for (std::size_t i = 0; i < rows.size(); ++i) {
+        const double limit = kHuberTuning * sigma;
+        weights[i] = residuals[i] <= limit ? 1.0 : limit / residuals[i];
+      }
+    }
+    for (std::size_t j = 0; j < kConstants; ++j) {
+      if (!identified[j]) fitted[j] = fallback_vector[j];
+    }
+    result.rounds = round + 1;
+    double change = 0.0;
+    for (std::size_t j = 0; j < kConstants; ++j) {
+      const double size = std::max(std::abs(current[j]), std::abs(fitted[j]));
+      if (size > 0.0) change = std::max(change, std::abs(fitted[j] - current[j]) / size);
+    }
+    settled = change < 1e-9;  // same critical threads again: one more scoring pass, then stop
+    current = fitted;
+  }
+
+  for (std::size_t j = 0; j < kConstants; ++j) {
+    if (!identified[j]) result.unidentified.emplace_back(kConstantNames[j]);
+  }
+  result.rms_relative_error = best_errors.rms;
+  result.max_relative_error = best_errors.max;
+  return result;
+}
+
+}  // namespace contactlab::tuner

@@ -1,0 +1,319 @@
+#include "contactlab/tuner/schedule_model.hpp"
+
+#include <algorithm>
+#include <limits>
+#include <queue>
+#include <stdexcept>
+#include <string>
+#include <tuple>
+
+namespace contactlab::tuner {
+
+namespace {
+
+constexpr std::uint64_t kNoChunkYet = std::numeric_limits<std::uint64_t>::max();
+
+std::string schedule_text(const Schedule& schedule) {
+  return std::string(to_string(schedule.kind)) + "," + std::to_string(schedule.chunk);
+}
+
+void check_threads(const char* function, int threads) {
+  if (threads < 1) {
+    throw std::invalid_argument(std::string(function) + ": threads = " + std::to_string(threads) +
+                                " must be >= 1");
+  }
+}
+
+void check_schedule(const char* function, const Schedule& schedule) {
+  if (schedule.chunk < 0 || (schedule.kind != ScheduleKind::kStatic && schedule.chunk == 0)) {
+    throw std::invalid_argument(std::string(function) + ": schedule " + schedule_text(schedule) +
+                                ": chunk must be >= 1 (or 0 = block with static)");
+  }
+}
+
+// Builds the per-thread shares chunk by chunk; prefix sums make a chunk's tests O(1).
+class ShareBuilder {
+ public:
+  ShareBuilder(std::span<const std::uint32_t> work, int threads, const MachineCosts& costs,
+               bool self_scheduled, bool record_chunks)
+      : work_(work),
+        costs_(costs),
+        self_scheduled_(self_scheduled),
+        record_chunks_(record_chunks),
+        prefix_(work.size() + 1, 0),
+        last_end_(static_cast<std::size_t>(threads), kNoChunkYet) {
+    for (std::size_t i = 0; i < work.size(); ++i) prefix_[i + 1] = prefix_[i] + work[i];
+    outcome_.threads.resize(static_cast<std::size_t>(threads));
+    outcome_.self_scheduled = self_scheduled;
+  }
+
+  std::uint64_t iterations() const { return work_.size(); }
+
+  // Gives [begin, end) to `thread`; returns the chunk's seconds.
+  double assign(int thread, std::uint64_t begin, std::uint64_t end) {
+    ThreadShare& share = outcome_.threads[static_cast<std::size_t>(thread)];
+    const std::uint64_t tests = prefix_[end] - prefix_[begin];
+    const std::uint64_t iterations = end - begin;
+    const bool breaks = last_end_[static_cast<std::size_t>(thread)] != begin;
+    const std::uint64_t cold = breaks && begin < end ? work_[begin] : 0;
+    share.tests += tests;
+    share.iterations += iterations;
+    share.chunks += 1;
+    if (self_scheduled_) share.grabs += 1;
+    if (breaks) {
+      share.stream_breaks += 1;
+      share.cold_tests += cold;
+    }
+    last_end_[static_cast<std::size_t>(thread)] = end;
+    if (record_chunks_) outcome_.chunks.push_back({begin, end, thread});
+    const double seconds =
+        static_cast<double>(tests) * costs_.seconds_per_test +
+        static_cast<double>(iterations) * costs_.seconds_per_iteration +
+        (self_scheduled_ ? costs_.seconds_per_grab : costs_.seconds_per_static_chunk) +
+        (breaks ? costs_.seconds_per_stream_break +
+                      static_cast<double>(cold) * costs_.seconds_per_cold_test
+                : 0.0);
+    share.seconds += seconds;
+    return seconds;
+  }
+
+  // The empty grab that ends each thread's self-scheduled loop.
+  void final_grabs() {
+    for (ThreadShare& share : outcome_.threads) {
+      share.grabs += 1;
+      share.seconds += costs_.seconds_per_grab;
+    }
+  }
+
+  ScheduleOutcome finish() {
+    std::vector<double> seconds;
+    std::vector<std::uint64_t> tests;
+    double max_seconds = 0.0;
+    for (const ThreadShare& share : outcome_.threads) {
+      seconds.push_back(share.seconds);
+      tests.push_back(share.tests);
+      max_seconds = std::max(max_seconds, share.seconds);
+      outcome_.max_thread_tests = std::max(outcome_.max_thread_tests, share.tests);
+      outcome_.total_chunks += share.chunks;
+    }
+    outcome_.makespan_seconds = costs_.seconds_per_region + max_seconds;
+    outcome_.imbalance = imbalance(std::span<const double>(seconds));
+    outcome_.test_imbalance = imbalance(std::span<const std::uint64_t>(tests));
+    return std::move(outcome_);
+  }
+
+ private:
+  std::span<const std::uint32_t> work_;
+  MachineCosts costs_;
+  bool self_scheduled_;
+  bool record_chunks_;
+  std::vector<std::uint64_t> prefix_;
+  std::vector<std::uint64_t> last_end_;  // where each thread's previous chunk ended
+  ScheduleOutcome outcome_;
+};
+
+ScheduleOutcome simulate_static(std::span<const std::uint32_t> work, int threads, int chunk,
+                                const MachineCosts& costs, bool record_chunks) {
+  ShareBuilder builder(work, threads, costs, false, record_chunks);
+  const std::uint64_t m = work.size();
+  const auto p = static_cast<std::uint64_t>(threads);
+  if (chunk == 0) {
+    // gomp_iter_static_next with chunk_size 0: q = n / nthreads, t = n % nthreads; threads
+    // below t take q + 1; s0 = q * i + t (t zeroed for them), e0 = s0 + q.
+    const std::uint64_t q = m / p, r = m % p;
+    for (std::uint64_t t = 0; t < p; ++t) {
+      const std::uint64_t begin = t * q + std::min(t, r);
+      const std::uint64_t end = begin + q + (t < r ? 1 : 0);
+      if (begin < end) builder.assign(static_cast<int>(t), begin, end);
+    }
+  } else {
+    const auto k = static_cast<std::uint64_t>(chunk);
+    for (std::uint64_t c = 0; c * k < m; ++c) {
+      builder.assign(static_cast<int>(c % p), c * k, std::min(m, (c + 1) * k));
+    }
+  }
+  return builder.finish();
+}
+
+// Greedy self-scheduling: the next chunk goes to the thread whose clock is lowest (ties: fewer
+// chunks taken, then lowest id). next_size(remaining) gives the next chunk's size.
+template <class NextSize>
+ScheduleOutcome simulate_self_scheduled(std::span<const std::uint32_t> work, int threads,
+                                        NextSize next_size, const MachineCosts& costs,
+                                        bool record_chunks) {
+  ShareBuilder builder(work, threads, costs, true, record_chunks);
+  using Clock = std::tuple<double, std::uint64_t, int>;  // free at, chunks taken, thread id
+  std::priority_queue<Clock, std::vector<Clock>, std::greater<>> free_threads;
+  for (int t = 0; t < threads; ++t) free_threads.emplace(0.0, 0, t);
+  const std::uint64_t m = builder.iterations();
+  std::uint64_t next = 0;
+  while (next < m) {
+    const std::uint64_t size = std::min<std::uint64_t>(next_size(m - next), m - next);
+    auto [free_at, taken, thread] = free_threads.top();
+    free_threads.pop();
+    free_at += builder.assign(thread, next, next + size);
+    free_threads.emplace(free_at, taken + 1, thread);
+    next += size;
+  }
+  builder.final_grabs();
+  return builder.finish();
+}
+
+std::uint64_t ceil_div(std::uint64_t a, std::uint64_t b) { return (a + b - 1) / b; }
+
+// libgomp/iter.c, gomp_iter_guided_next{,_locked}:
+//   n = (ws->end - start) / ws->incr;  q = (n + nthreads - 1) / nthreads;
+//   if (q < ws->chunk_size) q = ws->chunk_size;  if (q <= n) end = start + q; else end = ws->end;
+std::uint64_t guided_next_size(std::uint64_t remaining, std::uint64_t threads,
+                               std::uint64_t chunk) {
+  const std::uint64_t q = std::max(ceil_div(remaining, threads), chunk);
+  return std::min(q, remaining);
+}
+
+}  // namespace
+
+MachineCosts MachineCosts::tests_only() {
+  MachineCosts costs;
+  costs.seconds_per_test = 1.0;
+  costs.seconds_per_iteration = 0.0;
+  costs.seconds_per_static_chunk = 0.0;
+  costs.seconds_per_grab = 0.0;
+  costs.seconds_per_stream_break = 0.0;
+  costs.seconds_per_cold_test = 0.0;
+  costs.seconds_per_region = 0.0;
+  return costs;
+}
+
+ScheduleOutcome simulate_schedule(std::span<const std::uint32_t> work, int threads,
+                                  const Schedule& schedule, const MachineCosts& costs,
+                                  bool record_chunks) {
+  check_threads("simulate_schedule", threads);
+  check_schedule("simulate_schedule", schedule);
+  const auto chunk = static_cast<std::uint64_t>(schedule.chunk);
+  const auto p = static_cast<std::uint64_t>(threads);
+  switch (schedule.kind) {
+    case ScheduleKind::kStatic:
+      return simulate_static(work, threads, schedule.chunk, costs, record_chunks);
+    case ScheduleKind::kDynamic:
+      return simulate_self_scheduled(
+          work, threads, [chunk](std::uint64_t) { return chunk; }, costs, record_chunks);
+    case ScheduleKind::kGuided:
+      return simulate_self_scheduled(
+          work, threads,
+          [chunk, p](std::uint64_t remaining) { return guided_next_size(remaining, p, chunk); },
+          costs, record_chunks);
+  }
+  throw std::invalid_argument("simulate_schedule: unknown schedule kind");
+}
+
+ScheduleOutcome simulate_chunk_sequence(std::span<const std::uint32_t> work, int threads,
+                                        std::span<const std::uint64_t> chunk_sizes,
+                                        const MachineCosts& costs, bool record_chunks) {
+  check_threads("simulate_chunk_sequence", threads);
+  if (chunk_sizes.empty()) {
+    throw std::invalid_argument("simulate_chunk_sequence: the chunk-size sequence is empty");
+  }
+  for (std::size_t j = 0; j < chunk_sizes.size(); ++j) {
+    if (chunk_sizes[j] == 0) {
+      throw std::invalid_argument("simulate_chunk_sequence: chunk size " + std::to_string(j) +
+                                  " is 0");
+    }
+  }
+  std::size_t index = 0;
+  auto next_size = [&](std::uint64_t) {
+    const std::uint64_t size = chunk_sizes[std::min(index, chunk_sizes.size() - 1)];
+    ++index;
+    return size;
+  };
+  return simulate_self_scheduled(work, threads, next_size, costs, record_chunks);
+}
+
+std::vector<std::uint64_t> self_scheduling_chunk_sizes(std::uint64_t iterations, int threads,
+                                                       const Schedule& schedule) {
+  check_threads("self_scheduling_chunk_sizes", threads);
+  if (schedule.kind == ScheduleKind::kStatic || schedule.chunk < 1) {
+    throw std::invalid_argument("self_scheduling_chunk_sizes: schedule " + schedule_text(schedule) +
+                                " is not dynamic or guided with chunk >= 1");
+  }
+  const auto chunk = static_cast<std::uint64_t>(schedule.chunk);
+  const auto p = static_cast<std::uint64_t>(threads);
+  std::vector<std::uint64_t> sizes;
+  for (std::uint64_t remaining = iterations; remaining > 0;) {
+    const std::uint64_t size = schedule.kind == ScheduleKind::kDynamic
+                                   ? std::min(chunk, remaining)
+                                   : guided_next_size(remaining, p, chunk);
+    sizes.push_back(size);
+    remaining -= size;
+  }
+  return sizes;
+}
+
+std::vector<std::uint64_t> thread_tests(std::span<const std::uint32_t> work, int threads,
+                                        const Schedule& schedule) {
+  const ScheduleOutcome outcome =
+      simulate_schedule(work, threads, schedule, MachineCosts::tests_only());
+  std::vector<std::uint64_t> tests;
+  tests.reserve(outcome.threads.size());
+  for (const ThreadShare& share : outcome.threads) tests.push_back(share.tests);
+  return tests;
+}
+
+double imbalance(std::span<const double> per_thread) {
+  if (per_thread.empty()) return 0.0;
+  double max = 0.0, sum = 0.0;
+  for (const double load : per_thread) {
+    max = std::max(max, load);
+    sum += load;
+  }
+  if (max <= 0.0) return 0.0;
+  const double mean = sum / static_cast<double>(per_thread.size());
+  return (max - mean) / max;
+}
+
+double imbalance(std::span<const std::uint64_t> per_thread) {
+  std::vector<double> loads(per_thread.begin(), per_thread.end());
+  return imbalance(std::span<const double>(loads));
+}
+
+std::vector<int> log2_chunk_grid(int largest_chunk) {
+  if (largest_chunk < 1) {
+    throw std::invalid_argument(
+        "log2_chunk_grid: largest_chunk = " + std::to_string(largest_chunk) + " must be >= 1");
+  }
+  std::vector<int> grid;
+  for (long long k = 1; k <= largest_chunk; k *= 2) grid.push_back(static_cast<int>(k));
+  return grid;
+}
+
+ChunkPrediction predict_best_chunk(std::span<const std::uint32_t> work, int threads,
+                                   ScheduleKind kind, const MachineCosts& costs,
+                                   std::span<const int> candidate_chunks) {
+  check_threads("predict_best_chunk", threads);
+  if (candidate_chunks.empty()) {
+    throw std::invalid_argument("predict_best_chunk: no candidate chunks");
+  }
+  for (const int chunk : candidate_chunks) check_schedule("predict_best_chunk", {kind, chunk});
+  ChunkPrediction prediction;
+  for (const int chunk : candidate_chunks) {
+    const ScheduleOutcome outcome = simulate_schedule(work, threads, {kind, chunk}, costs);
+    prediction.candidates.push_back({chunk, outcome.makespan_seconds, outcome.imbalance,
+                                     outcome.max_thread_tests, outcome.total_chunks});
+  }
+  // Block (chunk 0) counts as the largest chunk of all: one contiguous run per thread.
+  auto locality_rank = [](int chunk) {
+    return chunk == 0 ? std::numeric_limits<long long>::max() : static_cast<long long>(chunk);
+  };
+  const CandidatePrediction* best = &prediction.candidates.front();
+  for (const CandidatePrediction& candidate : prediction.candidates) {
+    if (candidate.predicted_seconds < best->predicted_seconds ||
+        (candidate.predicted_seconds == best->predicted_seconds &&
+         locality_rank(candidate.chunk) > locality_rank(best->chunk))) {
+      best = &candidate;
+    }
+  }
+  prediction.best_chunk = best->chunk;
+  prediction.best_seconds = best->predicted_seconds;
+  return prediction;
+}
+
+}  // namespace contactlab::tuner
