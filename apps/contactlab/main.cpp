@@ -5,19 +5,22 @@
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <cmath>
-#include <fstream>
-#include <nlohmann/json.hpp>
+#include <filesystem>
 #include <optional>
 
 #include "contactlab/kernels/atomic_file.hpp"
-#include "contactlab/kernels/build_info.hpp"
 #include "contactlab/kernels/detector.hpp"
 #include "contactlab/kernels/error.hpp"
 #include "contactlab/kernels/scene_generate.hpp"
 #include "contactlab/kernels/scene_io.hpp"
+#include "contactlab/tuner/cache_sim.hpp"
+#include "contactlab/tuner/context.hpp"
+#include "contactlab/tuner/measure.hpp"
+#include "contactlab/tuner/papi_counters.hpp"
+#include "contactlab/tuner/result_schema.hpp"
 
 namespace cl = contactlab;
-using nlohmann::json;
+namespace tn = contactlab::tuner;
 
 namespace {
 
@@ -72,69 +75,41 @@ struct SceneOptions {
   }
 
   // The scene and its description for result files.
-  std::pair<cl::Scene, json> load() const {
+  std::pair<cl::Scene, tn::SceneRecord> load() const {
     if (!input.empty()) {
       const cl::Box b = box.empty() ? cl::Box{} : cl::parse_box(box);
       cl::Scene scene = cl::read_scene(input, b);
       if (!scene.has_diameters()) require_diameter();
-      json description = {{"kind", "file"},
-                          {"path", input},
-                          {"n", scene.size()},
-                          {"diameter", scene.has_diameters() ? json(nullptr) : json(diameter)},
-                          {"checksum", fmt::format("{:016x}", cl::scene_checksum(scene))}};
-      return {std::move(scene), description};
+      tn::SceneRecord record = tn::describe_file_scene(input, scene, diameter);
+      return {std::move(scene), std::move(record)};
     }
     require_diameter();
     const cl::SceneSpec s = spec();
     cl::Scene scene = cl::generate_scene(s);
-    json description = {{"kind", std::string(cl::to_string(s.kind))},
-                        {"n", s.n},
-                        {"diameter", s.diameter},
-                        {"seed", s.seed},
-                        {"core", s.core},
-                        {"background", s.background},
-                        {"checksum", fmt::format("{:016x}", cl::scene_checksum(scene))}};
-    return {std::move(scene), description};
+    tn::SceneRecord record = tn::describe_generated_scene(s, scene);
+    return {std::move(scene), std::move(record)};
+  }
+
+  // The options that make a child process load the same scene (doubles in shortest
+  // round-trip form, so the child's scene is bit-identical).
+  std::vector<std::string> arguments() const {
+    std::vector<std::string> args;
+    if (!input.empty()) {
+      args = {"--input", input};
+    } else {
+      args = {"--scene",  kind,
+              "--n",      std::to_string(n),
+              "--seed",   std::to_string(seed),
+              "--core",   fmt::format("{}", core),
+              "--background", fmt::format("{}", background),
+              "--blobs",  std::to_string(blobs),
+              "--size-ratio", fmt::format("{}", size_ratio)};
+    }
+    if (diameter_given) args.insert(args.end(), {"--diameter", fmt::format("{}", diameter)});
+    if (!box.empty()) args.insert(args.end(), {"--box", box});
+    return args;
   }
 };
-
-double median(std::vector<double> values) {
-  if (values.empty()) return 0.0;
-  std::sort(values.begin(), values.end());
-  const std::size_t m = values.size() / 2;
-  return values.size() % 2 ? values[m] : 0.5 * (values[m - 1] + values[m]);
-}
-
-struct Repeated {
-  std::vector<cl::DetectRun> runs;
-  double median_setup() const { return median(collect(&cl::DetectRun::setup_s)); }
-  double median_detect() const { return median(collect(&cl::DetectRun::detect_s)); }
-  double median_total() const {
-    std::vector<double> totals;
-    for (const auto& r : runs) totals.push_back(r.total_s());
-    return median(totals);
-  }
-  std::vector<double> collect(double cl::DetectRun::*field) const {
-    std::vector<double> values;
-    for (const auto& r : runs) values.push_back(r.*field);
-    return values;
-  }
-};
-
-Repeated repeat_detection(cl::ContactDetector& detector, const cl::Scene& scene,
-                          const cl::DetectOptions& options, int warmup, int repeat) {
-  for (int i = 0; i < warmup; ++i) detector.run(scene, options);
-  Repeated result;
-  for (int i = 0; i < repeat; ++i) result.runs.push_back(detector.run(scene, options));
-  return result;
-}
-
-json build_json() {
-  const auto& b = cl::build_info();
-  return {{"version", b.version},       {"compiler", b.compiler},   {"flags", b.flags},
-          {"build_type", b.build_type}, {"native", b.native},       {"git_commit", b.git_commit},
-          {"git_dirty", b.git_dirty}};
-}
 
 int command_scene(const SceneOptions& options, const std::string& out) {
   options.require_diameter();
@@ -156,57 +131,145 @@ struct DetectCommand {
   int threads = 0;
   int repeat = 3;
   int warmup = 1;
+  bool adaptive = false;
+  double target_ci = 0.02;
+  double time_budget = 60.0;
+  int max_repeat = 200;
+  bool papi = false;
+  std::string papi_events;
+  std::string cache_sim;
+  bool cache_sim_child = false;
   std::string contacts_out;
   std::string json_out;
 };
+
+std::vector<std::string> split_list(const std::string& text) {
+  std::vector<std::string> items;
+  std::size_t pos = 0;
+  while (pos <= text.size()) {
+    const auto comma = text.find(',', pos);
+    std::string item = text.substr(pos, comma == std::string::npos ? std::string::npos : comma - pos);
+    if (item.empty()) throw cl::InputError("--papi-events: empty event name in '" + text + "'");
+    items.push_back(std::move(item));
+    if (comma == std::string::npos) break;
+    pos = comma + 1;
+  }
+  return items;
+}
+
+std::string percent(const std::optional<double>& value) {
+  return value ? fmt::format("{:.3f}%", *value) : std::string("n/a");
+}
+
+void print_counters(const tn::CounterRecord& c) {
+  if (!c.available) {
+    fmt::print("counters {}: unavailable: {}\n", c.source, c.reason);
+    return;
+  }
+  fmt::print("counters {}: L1 miss {}  L2 miss {}{}\n", c.source, percent(c.l1_miss_percent),
+             percent(c.l2_miss_percent), c.simulation ? "  (simulated; an approximation)" : "");
+  for (const auto& e : c.events) {
+    std::string threads;
+    for (const auto v : e.per_thread) threads += (threads.empty() ? "" : ", ") + std::to_string(v);
+    fmt::print("  {:<28} {:>16}{}\n", e.name, e.total, threads.empty() ? "" : "  per thread [" + threads + "]");
+  }
+}
+
+// Under valgrind, launched by --cache-sim: one detection with callgrind's collection switched on
+// around the detection loop only.
+int command_cache_sim_child(const SceneOptions& scene_options, const cl::Variant& variant, int threads) {
+  if (!tn::running_under_valgrind()) {
+    throw cl::InputError("--cache-sim-child is internal (contactlab runs itself under valgrind with it); use --cache-sim");
+  }
+  auto [scene, record] = scene_options.load();
+  tn::CallgrindRegion region;
+  cl::DetectOptions options{variant, scene_options.diameter, threads, &region};
+  cl::ContactDetector detector;
+  const cl::DetectRun run = detector.run(scene, options);
+  fmt::print("contacts {}\n", run.contact_pairs);
+  return 0;
+}
 
 int command_detect(const SceneOptions& scene_options, const DetectCommand& command,
                    const std::string& command_line) {
   if (command.repeat < 1) throw cl::InputError("--repeat must be >= 1");
   if (command.warmup < 0) throw cl::InputError("--warmup must be >= 0");
   if (command.threads < 0) throw cl::InputError("--threads must be >= 0");
+  if (command.adaptive) {
+    if (!(command.target_ci > 0.0 && command.target_ci < 1.0)) {
+      throw cl::InputError(fmt::format("--target-ci must be in (0, 1) (a fraction: 0.02 = 2%), got {}", command.target_ci));
+    }
+    if (!(command.time_budget > 0.0)) throw cl::InputError("--time-budget must be > 0 seconds");
+    if (command.max_repeat < command.repeat) throw cl::InputError("--max-repeat must be >= --repeat");
+  }
   const cl::Variant variant = cl::parse_variant(command.variant);
+  const int threads = command.threads > 0 ? command.threads : omp_get_max_threads();
+  if (command.cache_sim_child) return command_cache_sim_child(scene_options, variant, threads);
+
+  std::optional<tn::CacheGeometry> geometry;
+  if (!command.cache_sim.empty()) geometry = tn::parse_cache_geometry(command.cache_sim);
   if (!command.contacts_out.empty()) cl::check_writable(command.contacts_out);
   if (!command.json_out.empty()) cl::check_writable(command.json_out);
-  auto [scene, scene_json] = scene_options.load();
+  std::optional<tn::PapiCounters> papi;
+  if (command.papi || !command.papi_events.empty()) {
+    papi.emplace(command.papi_events.empty() ? std::vector<std::string>{} : split_list(command.papi_events));
+  }
+  auto [scene, scene_record] = scene_options.load();
 
-  cl::DetectOptions options;
-  options.variant = variant;
-  options.diameter = scene_options.diameter;
-  options.threads = command.threads;
+  tn::ResultFile result;
+  result.context = tn::collect_context(command_line, threads);
+  for (const auto& w : result.context.warnings) fmt::print(stderr, "contactlab: warning: {}\n", w);
+
+  cl::DetectOptions options{variant, scene_options.diameter, threads, nullptr};
+  tn::MeasureOptions measure;
+  measure.repetition = {command.warmup, command.repeat, command.adaptive, command.target_ci,
+                        command.time_budget, command.max_repeat, 0.95};
+  measure.papi = papi ? &*papi : nullptr;
   cl::ContactDetector detector;
-  const Repeated result = repeat_detection(detector, scene, options, command.warmup, command.repeat);
-  const cl::DetectRun& last = result.runs.back();
+  tn::RunRecord run = tn::measure_detection(detector, scene, scene_record, options, measure);
 
-  fmt::print("variant {}  threads {}  N {}  grid {}x{}x{}  max occupancy {}\n", cl::to_string(variant),
-             last.threads, scene.size(), last.grid_dims[0], last.grid_dims[1], last.grid_dims[2],
-             last.max_cell_occupancy);
-  fmt::print("T_s {:.6f} s  T_c {:.6f} s  T_ALL {:.6f} s  (median of {})\n", result.median_setup(),
-             result.median_detect(), result.median_total(), command.repeat);
-  fmt::print("candidate tests {}  contacts {}\n", last.candidate_tests, last.contact_pairs);
+  if (geometry) {
+    tn::CacheSimRequest request;
+    request.geometry = *geometry;
+    request.executable = std::filesystem::read_symlink("/proc/self/exe").string();
+    request.arguments = {"detect"};
+    for (auto& a : scene_options.arguments()) request.arguments.push_back(std::move(a));
+    request.arguments.insert(request.arguments.end(), {"--variant", cl::to_string(variant), "--threads",
+                                                       std::to_string(threads), "--cache-sim-child"});
+    request.threads = threads;
+    fmt::print(stderr, "contactlab: simulating the {} caches under valgrind (slow)...\n", geometry->name);
+    run.counters.push_back(tn::simulate_caches(request));
+  }
+
+  const tn::RunAggregates& a = *run.aggregates;
+  const tn::RunWork& w = *run.work;
+  fmt::print("variant {}  threads {}  N {}  grid {}x{}x{}  max occupancy {}\n", run.parameters.variant,
+             run.parameters.threads, scene.size(), w.grid[0], w.grid[1], w.grid[2], w.max_cell_occupancy);
+  auto line = [](const char* name, const tn::Summary& s) {
+    const std::string interval =
+        s.count < 2 ? std::string("no interval from 1 sample")
+                    : fmt::format("[{:.6f}, {:.6f}] covers the median with {:.1f}%", s.interval.low,
+                                  s.interval.high, 100.0 * s.interval.coverage);
+    fmt::print("{:<6} median {:.6f} s  {}  min {:.6f}  max {:.6f}\n", name, s.median, interval, s.min, s.max);
+  };
+  fmt::print("{} repetitions after {} warm-up ({}), T_ALL = T_s + T_c:\n", a.repetitions, a.warmup_runs,
+             tn::to_string(a.stop_reason));
+  line("T_s", a.setup_s);
+  line("T_c", a.detect_s);
+  line("T_ALL", a.total_s);
+  fmt::print("load imbalance (t_max - t_mean) / t_max: median {:.3f}\n", a.imbalance.median);
+  fmt::print("candidate tests {}  contacts {}\n", w.candidate_tests, w.contact_pairs);
+  for (const auto& c : run.counters) {
+    print_counters(c);
+    if (!c.available) fmt::print(stderr, "contactlab: warning: no {} counters (reason above and in the result file)\n", c.source);
+  }
+  if (run.status != tn::RunStatus::kOk) fmt::print(stderr, "contactlab: run {}: {}\n", tn::to_string(run.status), run.message);
 
   if (!command.contacts_out.empty()) cl::write_pairs_csv(detector.canonical_contacts(), command.contacts_out);
-  if (!command.json_out.empty()) {
-    json record = {
-        {"variant", cl::to_string(variant)},
-        {"scene", scene_json},
-        {"threads", last.threads},
-        {"samples",
-         {{"setup_s", result.collect(&cl::DetectRun::setup_s)},
-          {"detect_s", result.collect(&cl::DetectRun::detect_s)}}},
-        {"median", {{"setup_s", result.median_setup()}, {"detect_s", result.median_detect()},
-                    {"total_s", result.median_total()}}},
-        {"thread_busy_s", last.thread_busy_s},
-        {"candidate_tests", last.candidate_tests},
-        {"contact_pairs", last.contact_pairs},
-        {"max_cell_occupancy", last.max_cell_occupancy},
-        {"grid", last.grid_dims},
-        {"build", build_json()},
-        {"command", command_line},
-    };
-    cl::write_file_atomically(command.json_out, [&](std::ostream& out) { out << record.dump(2) << '\n'; });
-  }
-  return 0;
+  const bool ok = run.status == tn::RunStatus::kOk;
+  result.runs.push_back(std::move(run));
+  if (!command.json_out.empty()) tn::write_result_file(command.json_out, result);
+  return ok ? 0 : 1;
 }
 
 int command_variants() {
@@ -226,11 +289,12 @@ int command_variants() {
 // The main job: every paper variant (and ours) on a small clustered scene, at 1 thread and at
 // every core, as a table like the paper's.
 int command_demo(SceneOptions scene_options, int repeat) {
+  if (repeat < 1) throw cl::InputError("--repeat must be >= 1");
   if (!scene_options.diameter_given) {
     scene_options.diameter = 1.0 / 200.0;
     scene_options.diameter_given = true;
   }
-  auto [scene, scene_json] = scene_options.load();
+  auto [scene, scene_record] = scene_options.load();
   const int cores = omp_get_num_procs();
   std::vector<cl::Variant> variants = cl::paper_variants();
   variants.push_back(cl::parse_variant("particle/sorted/half/static,200"));
@@ -247,11 +311,15 @@ int command_demo(SceneOptions scene_options, int repeat) {
     for (const int threads : {1, cores}) {
       if (threads == cores && cores == 1) break;
       cl::DetectOptions options{variant, scene_options.diameter, threads, nullptr};
-      const Repeated r = repeat_detection(detector, scene, options, 1, repeat);
-      if (threads == 1) serial = r.median_total();
+      tn::MeasureOptions measure;
+      measure.repetition.warmup = 1;
+      measure.repetition.repeat = repeat;
+      const tn::RunRecord r = tn::measure_detection(detector, scene, scene_record, options, measure);
+      const tn::RunAggregates& a = *r.aggregates;
+      if (threads == 1) serial = a.total_s.median;
       fmt::print("{:<36} {:>7} {:>10.4f} {:>10.4f} {:>10.4f} {:>8.2f} {:>12}\n", cl::to_string(variant),
-                 threads, r.median_setup(), r.median_detect(), r.median_total(),
-                 serial / r.median_total(), r.runs.back().contact_pairs);
+                 threads, a.setup_s.median, a.detect_s.median, a.total_s.median, serial / a.total_s.median,
+                 r.work->contact_pairs);
       cl::ContactList contacts = detector.canonical_contacts();
       if (!reference) {
         reference = std::move(contacts);
@@ -287,8 +355,20 @@ int main(int argc, char** argv) {
   detect->add_option("--threads", detect_command.threads, "OpenMP threads (0 = all)");
   detect->add_option("--repeat", detect_command.repeat, "timed repetitions");
   detect->add_option("--warmup", detect_command.warmup, "untimed runs first");
+  detect->add_flag("--adaptive", detect_command.adaptive,
+                   "repeat until the median's 95% interval is within --target-ci (--repeat = minimum)");
+  detect->add_option("--target-ci", detect_command.target_ci,
+                     "adaptive: target relative half-width of the median's interval (0.02 = 2%)");
+  detect->add_option("--time-budget", detect_command.time_budget, "adaptive: seconds before giving up");
+  detect->add_option("--max-repeat", detect_command.max_repeat, "adaptive: most timed repetitions");
+  detect->add_flag("--papi", detect_command.papi, "count L1/L2 data-cache misses per thread with PAPI");
+  detect->add_option("--papi-events", detect_command.papi_events,
+                     "count these PAPI events instead (comma-separated, e.g. perf::TASK-CLOCK)");
+  detect->add_option("--cache-sim", detect_command.cache_sim,
+                     "simulate caches under valgrind: host, fx10, or custom:L1SIZE,WAYS,LINE:L2SIZE,WAYS,LINE");
+  detect->add_flag("--cache-sim-child", detect_command.cache_sim_child)->group("");  // internal
   detect->add_option("--contacts-out", detect_command.contacts_out, "CSV of contacts i,j (i < j)");
-  detect->add_option("--json", detect_command.json_out, "result record (JSON)");
+  detect->add_option("--json", detect_command.json_out, "result file (docs/result-schema.md)");
 
   app.add_subcommand("variants", "list every variant and its parameters");
 

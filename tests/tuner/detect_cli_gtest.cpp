@@ -1,0 +1,120 @@
+// contactlab detect end to end: the result file it writes passes the strict reader, with
+// counters or a recorded reason; bad input gives one clear line, exit 2 and no file.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+
+#include "contactlab/tuner/papi_counters.hpp"
+#include "contactlab/tuner/result_schema.hpp"
+#include "tuner_test_support.hpp"
+
+namespace contactlab::tuner {
+namespace {
+
+const std::string kScene = " detect --scene clustered --n 3000 -D 0.02 --seed 3 ";
+
+test::CommandResult detect(const std::string& options) {
+  return test::run_command(test::contactlab_exe() + kScene + options);
+}
+
+TEST(DetectCli, PapiWritesCountersOrAReason) {
+  test::TempDir dir;
+  const std::string json = dir.file("r.json");
+  const auto r = detect("--threads 2 --repeat 3 --papi --json " + json);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const ResultFile file = read_result_file(json);
+  ASSERT_EQ(file.runs.size(), 1u);
+  const RunRecord& run = file.runs[0];
+  EXPECT_EQ(run.status, RunStatus::kOk);
+  ASSERT_EQ(run.counters.size(), 1u);
+  const CounterRecord& c = run.counters[0];
+  EXPECT_EQ(c.source, "papi");
+  if (c.available) {
+    EXPECT_TRUE(c.l1_miss_percent || c.l2_miss_percent);
+  } else {
+    EXPECT_FALSE(c.reason.empty());
+    EXPECT_NE(r.output.find("unavailable"), std::string::npos);
+  }
+  EXPECT_EQ(run.samples.total_s.size(), 3u);
+  EXPECT_EQ(run.samples.thread_busy_s[0].size(), 2u);
+  EXPECT_EQ(file.context.openmp.threads, 2);
+  EXPECT_NE(file.context.command_line.find("--papi"), std::string::npos);
+}
+
+TEST(DetectCli, SoftwareEventsPerThread) {
+  if (!papi_info().initialized) GTEST_SKIP() << "PAPI unavailable: " << papi_info().error;
+  test::TempDir dir;
+  const std::string json = dir.file("r.json");
+  const auto r = detect("--threads 2 --repeat 1 --warmup 0 --papi-events perf::TASK-CLOCK --json " + json);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const CounterRecord c = read_result_file(json).runs[0].counters[0];
+  if (!c.available) GTEST_SKIP() << c.reason;
+  ASSERT_EQ(c.events.size(), 1u);
+  EXPECT_EQ(c.events[0].per_thread.size(), 2u);
+}
+
+TEST(DetectCli, CacheSimulationFx10) {
+  if (const auto why = test::valgrind_obstacle(); !why.empty()) GTEST_SKIP() << why;
+  test::TempDir dir;
+  const std::string json = dir.file("r.json");
+  const auto r = detect("--variant cell/unsorted/static --threads 1 --repeat 1 --warmup 0 --cache-sim fx10 --json " + json);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const CounterRecord c = read_result_file(json).runs[0].counters[0];
+  EXPECT_EQ(c.source, "simulated:fx10");
+  ASSERT_TRUE(c.available) << c.reason;
+  EXPECT_TRUE(c.l1_miss_percent.has_value());
+  EXPECT_TRUE(c.l2_miss_percent.has_value());
+  ASSERT_TRUE(c.simulation.has_value());
+  EXPECT_TRUE(c.simulation->geometry.approximation);
+}
+
+TEST(DetectCli, MissingValgrindIsRecorded) {
+  test::TempDir dir;
+  const std::string json = dir.file("r.json");
+  const auto r = test::run_command("CONTACTLAB_VALGRIND=/nonexistent/valgrind " + test::contactlab_exe() + kScene +
+                                   "--repeat 1 --cache-sim fx10 --json " + json);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const CounterRecord c = read_result_file(json).runs[0].counters[0];
+  EXPECT_FALSE(c.available);
+  EXPECT_NE(c.reason.find("/nonexistent/valgrind"), std::string::npos) << c.reason;
+}
+
+TEST(DetectCli, AdaptiveRepetition) {
+  test::TempDir dir;
+  const std::string json = dir.file("r.json");
+  const auto r = detect("--threads 1 --repeat 2 --adaptive --target-ci 0.5 --time-budget 10 --max-repeat 40 --json " + json);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const RunRecord run = read_result_file(json).runs[0];
+  EXPECT_GE(run.aggregates->repetitions, 2);
+  EXPECT_LE(run.aggregates->repetitions, 40);
+  EXPECT_NE(run.aggregates->stop_reason, StopReason::kFixedCount);
+  EXPECT_TRUE(run.parameters.repetition.adaptive);
+}
+
+TEST(DetectCli, ContactsOutStillWritten) {
+  test::TempDir dir;
+  const auto r = detect("--repeat 1 --contacts-out " + dir.file("c.csv"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_TRUE(std::filesystem::exists(dir.file("c.csv")));
+}
+
+void expect_rejected(const std::string& options, const std::string& message) {
+  test::TempDir dir;
+  const std::string json = dir.file("r.json");
+  const auto r = detect(options + " --json " + json);
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("contactlab: error: "), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find(message), std::string::npos) << r.output;
+  EXPECT_FALSE(std::filesystem::exists(json)) << "a result file was written for bad input";
+}
+
+TEST(DetectCli, BadInputIsOneClearError) {
+  expect_rejected("--cache-sim custom:48K,8,64:1M,16,64", "not a power of two");
+  expect_rejected("--cache-sim sparc", "unknown cache geometry 'sparc'");
+  expect_rejected("--adaptive --target-ci 2", "--target-ci");
+  expect_rejected("--cache-sim-child", "--cache-sim-child is internal");
+  if (papi_info().initialized) expect_rejected("--papi-events PAPI_NOT_AN_EVENT_XYZ", "unknown PAPI event");
+}
+
+}  // namespace
+}  // namespace contactlab::tuner

@@ -1,0 +1,216 @@
+// The result schema: a real run survives a write/read round trip unchanged; the strict reader
+// rejects unknown, missing and mistyped fields with the JSON path; the documented example is valid.
+#include "contactlab/tuner/result_schema.hpp"
+
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <functional>
+#include <sstream>
+
+#include "contactlab/kernels/error.hpp"
+#include "contactlab/tuner/measure.hpp"
+#include "tuner_test_support.hpp"
+
+namespace contactlab::tuner {
+namespace {
+
+using nlohmann::json;
+
+// One real measurement with a context, plus a simulated counter record and a failed run, so
+// that every optional part of the schema is filled somewhere.
+ResultFile sample_result() {
+  const SceneSpec spec = test::small_clustered(3000);
+  const Scene scene = generate_scene(spec);
+  DetectOptions options{parse_variant("cell/sorted/static"), spec.diameter, 2, nullptr};
+  MeasureOptions measure;
+  measure.repetition.warmup = 1;
+  measure.repetition.repeat = 4;
+  ContactDetector detector;
+  ResultFile file;
+  file.context = collect_context("contactlab detect --test", 2);
+  RunRecord run = measure_detection(detector, scene, describe_generated_scene(spec, scene), options, measure);
+  CounterRecord simulated;
+  simulated.source = "simulated:fx10";
+  simulated.available = true;
+  simulated.l1_miss_percent = 4.5;
+  simulated.l2_miss_percent = 0.41;
+  simulated.l1_formula = "100 * (D1mr + D1mw) / (Dr + Dw)";
+  simulated.l2_formula = "100 * (DLmr + DLmw) / (Dr + Dw)";
+  simulated.counted_runs = 1;
+  simulated.events = {{"Dr", 1000, {}}, {"D1mr", 45, {}}};
+  simulated.simulation = SimulationRecord{CacheGeometry{"fx10", {32768, 2, 128}, {12582912, 24, 128}, "x", true},
+                                          "valgrind", 1, 0.5};
+  run.counters.push_back(simulated);
+  CounterRecord papi;
+  papi.source = "papi";
+  papi.available = false;
+  papi.reason = "PAPI_L1_DCM: Event does not exist";
+  run.counters.push_back(papi);
+  file.runs.push_back(run);
+  file.runs.push_back(failed_run(run.parameters, "out of memory"));
+  return file;
+}
+
+const json& sample_json() {
+  static const json j = sample_result();
+  return j;
+}
+
+// The message of the SchemaError that parse_result throws for `j`, or "" if none.
+std::string rejection(const json& j) {
+  try {
+    parse_result(j);
+  } catch (const SchemaError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(ResultSchema, RoundTripIsExact) {
+  const json& original = sample_json();
+  const ResultFile parsed = parse_result(original);
+  const json again = parsed;
+  EXPECT_EQ(again, original);
+  ASSERT_EQ(parsed.runs.size(), 2u);
+  EXPECT_EQ(parsed.runs[0].status, RunStatus::kOk);
+  EXPECT_EQ(parsed.runs[0].samples.total_s.size(), 4u);
+  EXPECT_EQ(parsed.runs[0].samples.thread_busy_s[0].size(), 2u);
+  EXPECT_EQ(parsed.runs[1].status, RunStatus::kFailed);
+  EXPECT_FALSE(parsed.runs[1].aggregates.has_value());
+  EXPECT_EQ(parsed.context.openmp.threads, 2);
+}
+
+TEST(ResultSchema, RoundTripThroughAFile) {
+  test::TempDir dir;
+  const std::string path = dir.file("r.json");
+  write_result_file(path, parse_result(sample_json()));
+  const json again = read_result_file(path);
+  EXPECT_EQ(again, sample_json());
+}
+
+TEST(ResultSchema, RecordsWhatEveryResultNeeds) {
+  const json& j = sample_json();
+  EXPECT_EQ(j["schema_version"], kSchemaVersion);
+  EXPECT_TRUE(j["context"]["build"].contains("git_commit"));
+  EXPECT_TRUE(j["context"]["machine"]["cores"].get<int>() >= 1);
+  EXPECT_TRUE(j["context"]["papi"].contains("version"));
+  const json& run = j["runs"][0];
+  EXPECT_EQ(run["aggregates"]["total_s"]["count"], 4);
+  EXPECT_EQ(run["samples"]["imbalance"].size(), 4u);
+  for (const auto& c : run["counters"]) {
+    EXPECT_TRUE(c["source"] == "papi" || c["source"].get<std::string>().rfind("simulated:", 0) == 0);
+  }
+}
+
+TEST(ResultSchema, RejectsUnknownFieldsWithThePath) {
+  json j = sample_json();
+  j["runs"][0]["parameters"]["colour"] = "blue";
+  EXPECT_EQ(rejection(j), "$.runs[0].parameters: unknown field 'colour'");
+  j = sample_json();
+  j["extra"] = 1;
+  EXPECT_EQ(rejection(j), "$: unknown field 'extra'");
+  j = sample_json();
+  j["runs"][0]["counters"][0]["simulation"]["geometry"]["l1"]["prefetch"] = true;
+  EXPECT_EQ(rejection(j), "$.runs[0].counters[0].simulation.geometry.l1: unknown field 'prefetch'");
+}
+
+TEST(ResultSchema, RejectsMissingFieldsWithThePath) {
+  json j = sample_json();
+  j["context"]["machine"].erase("cores");
+  EXPECT_EQ(rejection(j), "$.context.machine: missing field 'cores'");
+  j = sample_json();
+  j["runs"][1].erase("status");
+  EXPECT_EQ(rejection(j), "$.runs[1]: missing field 'status'");
+  j = sample_json();
+  j["context"]["openmp"]["env"].erase("OMP_PLACES");
+  EXPECT_EQ(rejection(j), "$.context.openmp.env: missing field 'OMP_PLACES'");
+}
+
+TEST(ResultSchema, RejectsWrongTypesWithThePath) {
+  json j = sample_json();
+  j["runs"][0]["samples"]["setup_s"][2] = "fast";
+  EXPECT_EQ(rejection(j), "$.runs[0].samples.setup_s[2]: expected number, got string");
+  j = sample_json();
+  j["runs"][0]["work"]["contact_pairs"] = -3;
+  EXPECT_EQ(rejection(j), "$.runs[0].work.contact_pairs: expected non-negative integer, got number");
+  j = sample_json();
+  j["runs"][0]["parameters"]["threads"] = 2.5;
+  EXPECT_EQ(rejection(j), "$.runs[0].parameters.threads: expected integer, got number");
+  j = sample_json();
+  j["runs"] = json::object();
+  EXPECT_EQ(rejection(j), "$.runs: expected array, got object");
+  EXPECT_EQ(rejection(json::array()), "$: expected object, got array");
+}
+
+TEST(ResultSchema, RejectsInconsistentRecords) {
+  json j = sample_json();
+  j["schema_version"] = 2;
+  EXPECT_NE(rejection(j).find("$.schema_version: unsupported schema_version 2"), std::string::npos);
+  j = sample_json();
+  j["runs"][0]["status"] = "great";
+  EXPECT_NE(rejection(j).find("$.runs[0]: status: unknown run status 'great'"), std::string::npos);
+  j = sample_json();
+  j["runs"][0]["counters"][1]["reason"] = "";
+  EXPECT_EQ(rejection(j), "$.runs[0].counters[1]: available is false but no reason is given");
+  j = sample_json();
+  j["runs"][0]["counters"][1]["l1_miss_percent"] = 0.0;  // a silent zero
+  EXPECT_EQ(rejection(j), "$.runs[0].counters[1]: miss rates given although available is false");
+  j = sample_json();
+  j["runs"][0]["counters"][0]["source"] = "guessed";
+  EXPECT_NE(rejection(j).find("$.runs[0].counters[0]: source 'guessed'"), std::string::npos);
+  j = sample_json();
+  j["runs"][0]["counters"][0]["simulation"] = nullptr;
+  EXPECT_EQ(rejection(j), "$.runs[0].counters[0]: a simulated source needs its 'simulation' record");
+  j = sample_json();
+  j["runs"][0]["samples"]["detect_s"].push_back(1.0);
+  EXPECT_NE(rejection(j).find("$.runs[0].samples: "), std::string::npos);
+  j = sample_json();
+  j["runs"][0]["aggregates"] = nullptr;
+  EXPECT_EQ(rejection(j), "$.runs[0]: a run with status 'ok' needs aggregates and work");
+  j = sample_json();
+  j["runs"][1]["message"] = "";
+  EXPECT_EQ(rejection(j), "$.runs[1]: a run with status 'failed' needs a message");
+  j = sample_json();
+  j["runs"][0]["aggregates"]["stop_reason"] = "tired";
+  EXPECT_NE(rejection(j).find("$.runs[0].aggregates: stop_reason: unknown stop reason 'tired'"), std::string::npos);
+}
+
+TEST(ResultSchema, FileErrorsNameTheFile) {
+  test::TempDir dir;
+  const std::string path = dir.file("broken.json");
+  std::ofstream(path) << "{ not json";
+  try {
+    read_result_file(path);
+    FAIL() << "expected InputError";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find(path), std::string::npos);
+  }
+  std::ofstream(path, std::ios::trunc) << "{\"schema_version\": 1}";
+  try {
+    read_result_file(path);
+    FAIL() << "expected SchemaError";
+  } catch (const SchemaError& e) {
+    EXPECT_EQ(std::string(e.what()), path + ": $: missing field 'context'");
+  }
+  EXPECT_THROW(read_result_file(dir.file("absent.json")), InputError);
+}
+
+// The example in docs/result-schema.md must be a valid result file.
+TEST(ResultSchema, DocumentedExampleIsValid) {
+  std::ifstream in(std::string(CONTACTLAB_SOURCE_DIR) + "/docs/result-schema.md");
+  ASSERT_TRUE(in) << "docs/result-schema.md not found";
+  std::stringstream text;
+  text << in.rdbuf();
+  const std::string doc = text.str();
+  const auto start = doc.find("```json\n");
+  ASSERT_NE(start, std::string::npos) << "no ```json block in docs/result-schema.md";
+  const auto body = start + 8;
+  const auto end = doc.find("```", body);
+  const json example = json::parse(doc.substr(body, end - body));
+  const ResultFile parsed = parse_result(example);
+  EXPECT_FALSE(parsed.runs.empty());
+}
+
+}  // namespace
+}  // namespace contactlab::tuner

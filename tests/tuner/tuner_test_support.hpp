@@ -1,0 +1,76 @@
+// Helpers of the tuner tests: running the contactlab program, temporary folders, a small scene.
+#pragma once
+
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <string>
+
+#include "contactlab/kernels/scene_generate.hpp"
+
+namespace contactlab::test {
+
+struct CommandResult {
+  int exit_code = -1;
+  std::string output;  // stdout and stderr together
+};
+
+// Runs a shell command line, capturing its output.
+inline CommandResult run_command(const std::string& command) {
+  CommandResult result;
+  FILE* pipe = ::popen((command + " 2>&1").c_str(), "r");
+  if (!pipe) return result;
+  char buffer[4096];
+  std::size_t got = 0;
+  while ((got = std::fread(buffer, 1, sizeof(buffer), pipe)) > 0) result.output.append(buffer, got);
+  const int status = ::pclose(pipe);
+  result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return result;
+}
+
+inline std::string contactlab_exe() { return CONTACTLAB_EXE; }
+
+// Why programs of this build cannot run under valgrind, or "" when they can: valgrind and
+// AddressSanitizer both need to own the address space.
+inline std::string valgrind_obstacle() {
+#if defined(__SANITIZE_ADDRESS__)
+  return "AddressSanitizer build: its binaries cannot run under valgrind";
+#else
+  if (run_command("valgrind --version").exit_code != 0) return "valgrind not on PATH";
+  return "";
+#endif
+}
+
+// A fresh folder under the system's temporary directory, removed with the object.
+class TempDir {
+ public:
+  TempDir() {
+    std::string pattern = (std::filesystem::temp_directory_path() / "contactlab-tuner-test-XXXXXX").string();
+    if (!::mkdtemp(pattern.data())) throw std::runtime_error("mkdtemp failed");
+    path_ = pattern;
+  }
+  ~TempDir() {
+    std::error_code ignored;
+    std::filesystem::remove_all(path_, ignored);
+  }
+  TempDir(const TempDir&) = delete;
+  TempDir& operator=(const TempDir&) = delete;
+  std::string file(const std::string& name) const { return (path_ / name).string(); }
+
+ private:
+  std::filesystem::path path_;
+};
+
+inline SceneSpec small_clustered(std::uint64_t n, double diameter = 0.02) {
+  SceneSpec spec;
+  spec.kind = SceneKind::kClustered;
+  spec.n = n;
+  spec.diameter = diameter;
+  spec.seed = 7;
+  return spec;
+}
+
+}  // namespace contactlab::test

@@ -1,0 +1,407 @@
+#include "contactlab/tuner/cache_sim.hpp"
+
+#include <fcntl.h>
+#include <fmt/core.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <chrono>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "contactlab/kernels/error.hpp"
+#include "contactlab/tuner/context.hpp"
+
+#if CONTACTLAB_HAVE_CALLGRIND_H
+#include <valgrind/callgrind.h>
+#endif
+
+extern char** environ;
+
+namespace contactlab::tuner {
+namespace {
+
+namespace fs = std::filesystem;
+
+bool is_power_of_two(std::uint64_t v) { return v != 0 && (v & (v - 1)) == 0; }
+
+void validate_level(const std::string& geometry, const char* level, const CacheLevel& c) {
+  auto fail = [&](const std::string& what) {
+    throw InputError(fmt::format("cache geometry '{}': {} ({} B, {}-way, {} B lines): {}", geometry, level,
+                                 c.size_bytes, c.associativity, c.line_bytes, what));
+  };
+  if (c.line_bytes < 16 || !is_power_of_two(static_cast<std::uint64_t>(c.line_bytes))) {
+    fail("line size must be a power of two >= 16 bytes");
+  }
+  if (c.associativity < 1) fail("associativity must be >= 1");
+  if (c.size_bytes <= static_cast<std::uint64_t>(c.line_bytes)) fail("size must exceed the line size");
+  if (static_cast<std::uint64_t>(c.associativity) > c.size_bytes / static_cast<std::uint64_t>(c.line_bytes)) {
+    fail("associativity exceeds size / line size");
+  }
+  const std::uint64_t way_bytes = std::uint64_t(c.associativity) * std::uint64_t(c.line_bytes);
+  if (c.size_bytes % way_bytes != 0 || !is_power_of_two(c.size_bytes / way_bytes)) {
+    fail(fmt::format("set count size / (ways * line) = {} / {} is not a power of two", c.size_bytes, way_bytes));
+  }
+}
+
+std::uint64_t parse_size(std::string_view text, const std::string& whole) {
+  std::uint64_t multiplier = 1;
+  if (!text.empty() && (text.back() == 'K' || text.back() == 'k')) {
+    multiplier = 1024;
+    text.remove_suffix(1);
+  } else if (!text.empty() && (text.back() == 'M' || text.back() == 'm')) {
+    multiplier = 1024 * 1024;
+    text.remove_suffix(1);
+  }
+  if (text.empty() || text.size() > 12 || text.find_first_not_of("0123456789") != std::string_view::npos) {
+    throw InputError(fmt::format("cache geometry '{}': '{}' is not a size (bytes, or with K or M)", whole, text));
+  }
+  return std::stoull(std::string(text)) * multiplier;
+}
+
+int parse_int(std::string_view text, const std::string& whole) {
+  if (text.empty() || text.size() > 9 || text.find_first_not_of("0123456789") != std::string_view::npos) {
+    throw InputError(fmt::format("cache geometry '{}': '{}' is not a positive integer", whole, text));
+  }
+  return std::stoi(std::string(text));
+}
+
+CacheLevel parse_level(std::string_view text, const std::string& whole) {
+  std::vector<std::string_view> parts;
+  std::size_t pos = 0;
+  for (;;) {
+    const auto comma = text.find(',', pos);
+    parts.push_back(text.substr(pos, comma == std::string_view::npos ? std::string_view::npos : comma - pos));
+    if (comma == std::string_view::npos) break;
+    pos = comma + 1;
+  }
+  if (parts.size() != 3) {
+    throw InputError(fmt::format("cache geometry '{}': '{}' must be SIZE,WAYS,LINE", whole, text));
+  }
+  return {parse_size(parts[0], whole), parse_int(parts[1], whole), parse_int(parts[2], whole)};
+}
+
+// The valgrind to run: the request's, $CONTACTLAB_VALGRIND, or `valgrind` on PATH; empty if none.
+std::string find_valgrind(const std::string& requested) {
+  std::string candidate = requested;
+  if (candidate.empty()) {
+    if (const char* v = std::getenv("CONTACTLAB_VALGRIND")) candidate = v;
+  }
+  if (!candidate.empty()) return ::access(candidate.c_str(), X_OK) == 0 ? candidate : "";
+  const char* path = std::getenv("PATH");
+  std::stringstream dirs(path ? path : "/usr/bin:/bin");
+  std::string dir;
+  while (std::getline(dirs, dir, ':')) {
+    const std::string full = (dir.empty() ? "." : dir) + "/valgrind";
+    if (::access(full.c_str(), X_OK) == 0) return full;
+  }
+  return "";
+}
+
+std::string tail_of_file(const std::string& path, std::size_t lines) {
+  std::ifstream in(path);
+  std::vector<std::string> all;
+  std::string line;
+  while (std::getline(in, line)) {
+    if (!line.empty()) all.push_back(line);
+  }
+  std::string out;
+  for (std::size_t i = all.size() > lines ? all.size() - lines : 0; i < all.size(); ++i) {
+    out += (out.empty() ? "" : " | ") + all[i];
+  }
+  return out;
+}
+
+std::string valgrind_version(const std::string& log_path) {
+  std::ifstream in(log_path);
+  std::string line;
+  while (std::getline(in, line)) {
+    const auto at = line.find("Using Valgrind-");
+    if (at != std::string::npos) {
+      const auto start = at + std::strlen("Using ");
+      return line.substr(start, line.find(' ', start) - start);
+    }
+  }
+  return "valgrind";
+}
+
+// Runs argv with stdout and stderr to `log`, OMP_WAIT_POLICY=passive added to the environment
+// (spinning OpenMP threads would be simulated too and make valgrind crawl). Returns the wait
+// status, or -1 with `error` set.
+int run_process(const std::vector<std::string>& argv, const std::string& log, std::string& error) {
+  std::vector<char*> args;
+  for (const auto& a : argv) args.push_back(const_cast<char*>(a.c_str()));
+  args.push_back(nullptr);
+  std::vector<std::string> env_strings;
+  for (char** e = environ; *e; ++e) {
+    if (std::strncmp(*e, "OMP_WAIT_POLICY=", 16) != 0) env_strings.emplace_back(*e);
+  }
+  env_strings.emplace_back("OMP_WAIT_POLICY=passive");
+  std::vector<char*> envp;
+  for (auto& e : env_strings) envp.push_back(e.data());
+  envp.push_back(nullptr);
+
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_addopen(&actions, 1, log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  posix_spawn_file_actions_adddup2(&actions, 1, 2);
+  pid_t pid = 0;
+  const int rc = posix_spawn(&pid, args[0], &actions, nullptr, args.data(), envp.data());
+  posix_spawn_file_actions_destroy(&actions);
+  if (rc != 0) {
+    error = fmt::format("cannot start {}: {}", argv[0], std::strerror(rc));
+    return -1;
+  }
+  int status = 0;
+  while (waitpid(pid, &status, 0) < 0) {
+    if (errno != EINTR) {
+      error = fmt::format("waitpid: {}", std::strerror(errno));
+      return -1;
+    }
+  }
+  return status;
+}
+
+std::string level_flag(const CacheLevel& c) {
+  return fmt::format("{},{},{}", c.size_bytes, c.associativity, c.line_bytes);
+}
+
+constexpr const char* kRegion = "detection loop, every OpenMP thread (collection toggled per thread)";
+
+}  // namespace
+
+CacheGeometry fx10_geometry() {
+  CacheGeometry g;
+  g.name = "fx10";
+  g.l1 = {32 * 1024, 2, 128};
+  g.l2 = {12 * 1024 * 1024, 24, 128};
+  g.description =
+      "Fujitsu FX10 (SPARC64 IXfx) approximation: L1D 32 KiB 2-way 128 B lines, shared L2 12 MiB "
+      "24-way 128 B lines (as commonly cited, not checked against the hardware); no prefetch, "
+      "LRU replacement, one core's view of the whole L2";
+  g.approximation = true;
+  return g;
+}
+
+CacheGeometry host_geometry() {
+  const MachineInfo& m = machine_info();
+  const CacheInfo* l1 = nullptr;
+  const CacheInfo* l2 = nullptr;
+  for (const auto& c : m.caches) {
+    if (c.level == 1 && c.type == "data" && !l1) l1 = &c;
+    if (c.level == 2 && c.type != "instruction" && !l2) l2 = &c;
+  }
+  if (!l1 || !l2) {
+    throw InputError(fmt::format("cache geometry 'host': cannot read this machine's {} (topology from {})",
+                                 !l1 ? "L1 data cache" : "L2 cache", m.topology_source));
+  }
+  for (const CacheInfo* c : {l1, l2}) {
+    if (c->associativity <= 0 || c->line_bytes <= 0) {
+      throw InputError(fmt::format(
+          "cache geometry 'host': L{} associativity or line size unknown ({}-way, {} B lines, from {}); "
+          "give it as custom:...",
+          c->level, c->associativity, c->line_bytes, m.topology_source));
+    }
+  }
+  CacheGeometry g;
+  g.name = "host";
+  g.l1 = {l1->size_bytes, l1->associativity, l1->line_bytes};
+  g.l2 = {l2->size_bytes, l2->associativity, l2->line_bytes};
+  g.description = fmt::format(
+      "this machine's L1D and L2 as read from {} ({}): L2 simulated as the last level, so L3 "
+      "and prefetchers are not modelled",
+      m.topology_source, m.cpu_model);
+  g.approximation = true;
+  validate_geometry(g);
+  return g;
+}
+
+CacheGeometry parse_cache_geometry(std::string_view text) {
+  const std::string whole(text);
+  if (text == "fx10") return fx10_geometry();
+  if (text == "host") return host_geometry();
+  constexpr std::string_view kCustom = "custom:";
+  if (text.substr(0, kCustom.size()) == kCustom) {
+    const std::string_view rest = text.substr(kCustom.size());
+    const auto colon = rest.find(':');
+    if (colon == std::string_view::npos) {
+      throw InputError(fmt::format("cache geometry '{}': expected custom:L1SIZE,WAYS,LINE:L2SIZE,WAYS,LINE", whole));
+    }
+    CacheGeometry g;
+    g.name = "custom";
+    g.l1 = parse_level(rest.substr(0, colon), whole);
+    g.l2 = parse_level(rest.substr(colon + 1), whole);
+    g.description = "user-given geometry " + whole;
+    g.approximation = true;
+    validate_geometry(g);
+    return g;
+  }
+  throw InputError(fmt::format(
+      "unknown cache geometry '{}' (expected host, fx10 or custom:L1SIZE,WAYS,LINE:L2SIZE,WAYS,LINE)", whole));
+}
+
+void validate_geometry(const CacheGeometry& g) {
+  validate_level(g.name, "L1", g.l1);
+  validate_level(g.name, "L2", g.l2);
+  if (g.l2.size_bytes < g.l1.size_bytes) {
+    throw InputError(fmt::format("cache geometry '{}': L2 ({} B) is smaller than L1 ({} B)", g.name,
+                                 g.l2.size_bytes, g.l1.size_bytes));
+  }
+}
+
+#if CONTACTLAB_HAVE_CALLGRIND_H
+void CallgrindRegion::thread_begin(int) { CALLGRIND_TOGGLE_COLLECT; }
+void CallgrindRegion::thread_end(int) { CALLGRIND_TOGGLE_COLLECT; }
+bool running_under_valgrind() { return RUNNING_ON_VALGRIND != 0; }
+bool callgrind_toggle_compiled_in() { return true; }
+#else
+void CallgrindRegion::thread_begin(int) {}
+void CallgrindRegion::thread_end(int) {}
+bool running_under_valgrind() { return false; }
+bool callgrind_toggle_compiled_in() { return false; }
+#endif
+
+std::uint64_t CallgrindTotals::get(std::string_view event) const {
+  for (std::size_t i = 0; i < events.size(); ++i) {
+    if (events[i] == event) return i < totals.size() ? totals[i] : 0;
+  }
+  throw InputError(fmt::format("callgrind output has no event '{}' (was --cache-sim=yes given?)", event));
+}
+
+CallgrindTotals read_callgrind_totals(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw InputError(path + ": cannot open callgrind output: " + std::strerror(errno));
+  CallgrindTotals t;
+  std::string line, totals_line, summary_line;
+  while (std::getline(in, line)) {
+    if (line.rfind("events:", 0) == 0) {
+      std::istringstream words(line.substr(7));
+      t.events.clear();
+      for (std::string w; words >> w;) t.events.push_back(w);
+    } else if (line.rfind("totals:", 0) == 0) {
+      totals_line = line.substr(7);
+    } else if (line.rfind("summary:", 0) == 0) {
+      summary_line = line.substr(8);
+    }
+  }
+  if (t.events.empty()) throw InputError(path + ": no 'events:' line in callgrind output");
+  const std::string& values = !totals_line.empty() ? totals_line : summary_line;
+  if (values.empty()) throw InputError(path + ": no 'totals:' or 'summary:' line in callgrind output");
+  std::istringstream words(values);
+  for (std::string w; words >> w;) {
+    if (w.find_first_not_of("0123456789") != std::string::npos) {
+      throw InputError(path + ": malformed totals value '" + w + "'");
+    }
+    t.totals.push_back(std::stoull(w));
+  }
+  // Trailing zero counts may be omitted by callgrind.
+  if (t.totals.size() > t.events.size()) throw InputError(path + ": more totals than events");
+  t.totals.resize(t.events.size(), 0);
+  return t;
+}
+
+CounterRecord simulate_caches(const CacheSimRequest& request) {
+  validate_geometry(request.geometry);
+  CounterRecord r;
+  r.source = "simulated:" + request.geometry.name;
+  r.region = kRegion;
+  SimulationRecord sim;
+  sim.geometry = request.geometry;
+  sim.threads = request.threads;
+  sim.simulator = "valgrind callgrind --cache-sim=yes";
+  r.notes.push_back("simulated, not measured: " + request.geometry.description);
+  if (request.threads > 1) {
+    r.notes.push_back(
+        "valgrind runs threads one at a time through ONE simulated cache: with several threads "
+        "the rates describe a shared cache, not per-core L1s");
+  }
+  auto unavailable = [&](std::string reason) {
+    r.available = false;
+    r.reason = std::move(reason);
+    r.simulation = sim;
+    return r;
+  };
+  if (!callgrind_toggle_compiled_in()) {
+    return unavailable("built without valgrind/callgrind.h: the detection region cannot be isolated");
+  }
+  const std::string valgrind = find_valgrind(request.valgrind);
+  if (valgrind.empty()) {
+    return unavailable(request.valgrind.empty() && !std::getenv("CONTACTLAB_VALGRIND")
+                           ? "valgrind not found on PATH (install valgrind or set CONTACTLAB_VALGRIND)"
+                           : "valgrind '" + (request.valgrind.empty() ? std::string(std::getenv("CONTACTLAB_VALGRIND"))
+                                                                      : request.valgrind) +
+                                 "' is not an executable file");
+  }
+
+  std::error_code ec;
+  std::string pattern = (fs::temp_directory_path(ec) / "contactlab-cachesim-XXXXXX").string();
+  if (!::mkdtemp(pattern.data())) {
+    return unavailable(fmt::format("cannot create a temporary directory: {}", std::strerror(errno)));
+  }
+  const fs::path dir(pattern);
+  const std::string out_file = (dir / "callgrind.out").string();
+  const std::string log_file = (dir / "valgrind.log").string();
+  const std::string child_log = (dir / "child.log").string();
+  const CacheLevel& l1 = request.geometry.l1;
+  std::vector<std::string> argv{valgrind,
+                                "--tool=callgrind",
+                                "--cache-sim=yes",
+                                "--D1=" + level_flag(l1),
+                                "--I1=" + level_flag(l1),
+                                "--LL=" + level_flag(request.geometry.l2),
+                                "--collect-atstart=no",
+                                "--callgrind-out-file=" + out_file,
+                                "--log-file=" + log_file,
+                                request.executable};
+  argv.insert(argv.end(), request.arguments.begin(), request.arguments.end());
+
+  const auto start = std::chrono::steady_clock::now();
+  std::string error;
+  const int status = run_process(argv, child_log, error);
+  sim.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  sim.simulator = valgrind_version(log_file) + " callgrind --cache-sim=yes";
+  auto finish = [&](CounterRecord record) {
+    fs::remove_all(dir, ec);
+    return record;
+  };
+  if (status < 0) return finish(unavailable(error));
+  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
+    const std::string how = WIFEXITED(status) ? fmt::format("exited with status {}", WEXITSTATUS(status))
+                                              : fmt::format("was killed by signal {}", WTERMSIG(status));
+    std::string detail = tail_of_file(child_log, 2);
+    if (detail.empty()) detail = tail_of_file(log_file, 3);
+    return finish(unavailable(fmt::format("the simulated run {}: {}", how, detail)));
+  }
+  try {
+    const CallgrindTotals totals = read_callgrind_totals(out_file);
+    const std::uint64_t reads = totals.get("Dr"), writes = totals.get("Dw");
+    const std::uint64_t l1_misses = totals.get("D1mr") + totals.get("D1mw");
+    const std::uint64_t ll_misses = totals.get("DLmr") + totals.get("DLmw");
+    if (reads + writes == 0) {
+      return finish(unavailable(
+          "no data accesses were collected in the detection region (the program did not toggle "
+          "callgrind's collection)"));
+    }
+    for (const char* e : {"Ir", "Dr", "Dw", "D1mr", "D1mw", "DLmr", "DLmw"}) {
+      r.events.push_back({e, totals.get(e), {}});
+    }
+    const double accesses = static_cast<double>(reads + writes);
+    r.l1_miss_percent = 100.0 * static_cast<double>(l1_misses) / accesses;
+    r.l2_miss_percent = 100.0 * static_cast<double>(ll_misses) / accesses;
+    r.l1_formula = "100 * (D1mr + D1mw) / (Dr + Dw) (per data access)";
+    r.l2_formula = "100 * (DLmr + DLmw) / (Dr + Dw) (per data access; L2 = simulated last level)";
+    r.available = true;
+    r.counted_runs = 1;
+    r.simulation = sim;
+    return finish(r);
+  } catch (const InputError& e) {
+    return finish(unavailable(e.what()));
+  }
+}
+
+}  // namespace contactlab::tuner

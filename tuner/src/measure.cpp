@@ -1,0 +1,85 @@
+#include "contactlab/tuner/measure.hpp"
+
+#include <fmt/core.h>
+#include <omp.h>
+
+#include <algorithm>
+
+namespace contactlab::tuner {
+
+RunRecord measure_detection(ContactDetector& detector, const Scene& scene, const SceneRecord& scene_record,
+                            const DetectOptions& options, const MeasureOptions& measure) {
+  validate(measure.repetition);
+  DetectOptions timed = options;
+  timed.observer = nullptr;
+
+  RunRecord record;
+  record.parameters.variant = to_string(options.variant);
+  record.parameters.threads = options.threads > 0 ? options.threads : omp_get_max_threads();
+  record.parameters.scene = scene_record;
+  record.parameters.repetition = measure.repetition;
+
+  RunSamples& s = record.samples;
+  std::optional<DetectRun> first;
+  std::vector<std::uint64_t> contact_counts;
+  DetectRun last;
+  const RepetitionOutcome outcome = repeat_measurement(
+      measure.repetition, [&] { detector.run(scene, timed); },
+      [&] {
+        last = detector.run(scene, timed);
+        s.setup_s.push_back(last.setup_s);
+        s.detect_s.push_back(last.detect_s);
+        s.total_s.push_back(last.total_s());
+        s.thread_busy_s.push_back(last.thread_busy_s);
+        s.imbalance.push_back(load_imbalance(last.thread_busy_s));
+        contact_counts.push_back(last.contact_pairs);
+        return last.total_s();
+      });
+
+  if (measure.papi) {
+    DetectOptions counted = options;
+    counted.observer = measure.papi;
+    detector.run(scene, counted);
+    record.counters.push_back(measure.papi->record());
+  }
+
+  RunAggregates a;
+  const double level = measure.repetition.level;
+  a.setup_s = summarize(s.setup_s, level);
+  a.detect_s = summarize(s.detect_s, level);
+  a.total_s = summarize(s.total_s, level);
+  a.imbalance = summarize(s.imbalance, level);
+  const std::size_t threads = last.thread_busy_s.size();
+  for (std::size_t t = 0; t < threads; ++t) {
+    std::vector<double> busy;
+    for (const auto& rep : s.thread_busy_s) busy.push_back(t < rep.size() ? rep[t] : 0.0);
+    a.thread_busy_median_s.push_back(median(busy));
+  }
+  a.repetitions = outcome.repetitions;
+  a.warmup_runs = outcome.warmup_runs;
+  a.stop_reason = outcome.stop;
+  a.measurement_s = outcome.elapsed_s;
+  record.aggregates = a;
+  record.parameters.threads = last.threads;
+  record.work = RunWork{last.candidate_tests, last.contact_pairs, last.max_cell_occupancy, last.grid_dims};
+
+  const auto [lo, hi] = std::minmax_element(contact_counts.begin(), contact_counts.end());
+  if (*lo != *hi) {
+    record.status = RunStatus::kInvalid;
+    record.message = fmt::format("contact count differs between repetitions ({} to {})", *lo, *hi);
+  } else if (measure.expected_contact_pairs && *measure.expected_contact_pairs != last.contact_pairs) {
+    record.status = RunStatus::kInvalid;
+    record.message = fmt::format("{} contact pairs, expected {}", last.contact_pairs, *measure.expected_contact_pairs);
+  }
+  return record;
+}
+
+RunRecord failed_run(RunParameters parameters, std::string message) {
+  RunRecord record;
+  record.status = RunStatus::kFailed;
+  record.message = message.empty() ? "failed" : std::move(message);
+  record.parameters = std::move(parameters);
+  return record;
+}
+
+}  // namespace contactlab::tuner
