@@ -1,0 +1,268 @@
+// CellGrid (dims, widening, coordinates, keys) and CellRegistry (the counting sort).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <set>
+
+#include "contactlab/kernels/error.hpp"
+#include "test_support.hpp"
+
+namespace contactlab::test {
+namespace {
+
+using Dims = std::array<int, 3>;
+
+// The header's formula: G = max(1, floor(L / w)), w = D (1 + 2^-40).
+int expected_dim(double extent, double d) {
+  const double w = d * (1.0 + 0x1.0p-40);
+  return std::max(1, static_cast<int>(std::floor(extent / w)));
+}
+
+TEST(CellGrid, DimsFollowTheDocumentedFormula) {
+  // D = 1/200 in the unit box: 1 / (D (1 + 2^-40)) is just below 200, so 199 cells.
+  EXPECT_EQ(CellGrid(Box{}, 1.0 / 200.0, CellNumbering::kLinear).dims(), (Dims{199, 199, 199}));
+  EXPECT_EQ(CellGrid(Box{}, 0.1, CellNumbering::kLinear).dims(), (Dims{9, 9, 9}));
+  EXPECT_EQ(CellGrid(Box{}, 0.25, CellNumbering::kLinear).dims(), (Dims{3, 3, 3}));
+  EXPECT_EQ(CellGrid(Box{}, 0.3, CellNumbering::kLinear).dims(), (Dims{3, 3, 3}));
+  EXPECT_EQ(CellGrid(Box{}, 1.0 / 256.0, CellNumbering::kLinear).dims(), (Dims{255, 255, 255}));
+  // Slightly below 1/200, the widening no longer drops a cell.
+  EXPECT_EQ(CellGrid(Box{}, 1.0 / 200.0 * (1.0 - 1e-9), CellNumbering::kLinear).dims(), (Dims{200, 200, 200}));
+  // D >= the box: one cell.
+  EXPECT_EQ(CellGrid(Box{}, 1.0, CellNumbering::kLinear).dims(), (Dims{1, 1, 1}));
+  EXPECT_EQ(CellGrid(Box{}, 0.9, CellNumbering::kLinear).dims(), (Dims{1, 1, 1}));
+  EXPECT_EQ(CellGrid(Box{}, 1e6, CellNumbering::kLinear).dims(), (Dims{1, 1, 1}));
+  // Anisotropic, offset box.
+  const Box box{{-1.0, 2.0, 10.0}, {1.0, 2.5, 13.0}};
+  // 3 / 0.3 is 10 in exact arithmetic, but the widened width makes it 9.99999999999...
+  EXPECT_EQ(CellGrid(box, 0.3, CellNumbering::kLinear).dims(), (Dims{6, 1, 9}));
+  for (const double d : {0.001 * 7, 0.013, 0.02, 0.0625, 1.0 / 3.0, 0.49, 0.5, 0.51}) {
+    for (const Box& b : {Box{}, box}) {
+      const CellGrid grid(b, d, CellNumbering::kLinear);
+      for (int axis = 0; axis < 3; ++axis) {
+        EXPECT_EQ(grid.dims()[axis], expected_dim(b.extent(axis), d)) << "D = " << d << " axis " << axis;
+        // Cells are at least D wide (unless one cell spans a box narrower than D), so
+        // neighbours within D are at most one cell apart.
+        if (grid.dims()[axis] > 1) {
+          EXPECT_GE(grid.cell_width()[axis], d) << "D = " << d;
+        }
+        EXPECT_DOUBLE_EQ(grid.cell_width()[axis] * grid.dims()[axis], b.extent(axis));
+      }
+      EXPECT_EQ(grid.cell_count(), std::uint64_t(grid.dims()[0]) * grid.dims()[1] * grid.dims()[2]);
+    }
+  }
+}
+
+TEST(CellGrid, RejectsBadWidths) {
+  for (const double d : {0.0, -0.0, -1.0, std::numeric_limits<double>::quiet_NaN(),
+                         std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity()}) {
+    EXPECT_THROW(CellGrid(Box{}, d, CellNumbering::kLinear), InputError) << "D = " << d;
+    EXPECT_THROW(CellGrid(Box{}, d, CellNumbering::kMorton), InputError) << "D = " << d;
+  }
+  // More than 2^28 cells.
+  EXPECT_THROW(CellGrid(Box{}, 1e-4, CellNumbering::kLinear), InputError);
+  EXPECT_THROW(CellGrid(Box{}, 1e-300, CellNumbering::kLinear), InputError);
+  EXPECT_THROW(CellGrid(Box{}, 1e-4, CellNumbering::kMorton), InputError);
+  // 2^28 cells exactly is the limit: 2^28 x 1 x 1 fits, one more cell does not.
+  const Box thin{{0, 0, 0}, {double(CellGrid::kMaxKeys), 1, 1}};
+  EXPECT_NO_THROW(CellGrid(thin, 1.0 * (1 - 1e-9), CellNumbering::kLinear));
+  const Box thinner{{0, 0, 0}, {double(CellGrid::kMaxKeys) + 1, 1, 1}};
+  EXPECT_THROW(CellGrid(thinner, 1.0 * (1 - 1e-9), CellNumbering::kLinear), InputError);
+}
+
+TEST(CellGrid, UpperFacesLandInTheLastCell) {
+  for (const double d : {1.0 / 200.0, 0.1, 0.3, 1.0 / 7.0, 2.0}) {
+    for (const auto numbering : {CellNumbering::kLinear, CellNumbering::kMorton}) {
+      // (599 cells on x at D = 1/200 would need 2^30 Morton keys: linear numbering only.)
+      if (numbering == CellNumbering::kMorton && d < 0.01) continue;
+      const Box box{{-1.0, 0.0, 5.0}, {2.0, 1.0, 5.5}};
+      const CellGrid grid(box, d, numbering);
+      const Dims last{grid.dims()[0] - 1, grid.dims()[1] - 1, grid.dims()[2] - 1};
+      EXPECT_EQ(grid.coords_of(2.0, 1.0, 5.5), last) << "D = " << d;
+      EXPECT_EQ(grid.coords_of(-1.0, 0.0, 5.0), (Dims{0, 0, 0}));
+      EXPECT_EQ(grid.coords_of(2.0, 0.0, 5.0)[0], last[0]);
+      EXPECT_EQ(grid.coords_of(-1.0, 1.0, 5.0)[1], last[1]);
+      EXPECT_EQ(grid.coords_of(-1.0, 0.0, 5.5)[2], last[2]);
+      // Just inside the upper face: still the last cell.
+      EXPECT_EQ(grid.coords_of(std::nextafter(2.0, 0.0), std::nextafter(1.0, 0.0), std::nextafter(5.5, 0.0)), last);
+    }
+  }
+}
+
+TEST(CellGrid, CoordinatesAreInRangeAndMonotone) {
+  const Box box{{-1.0, 0.0, 5.0}, {2.0, 1.0, 5.5}};
+  const CellGrid grid(box, 0.037, CellNumbering::kLinear);
+  Xoshiro256 rng(3);
+  for (int k = 0; k < 20000; ++k) {
+    const double x = -1.0 + 3.0 * rng.uniform(), y = rng.uniform(), z = 5.0 + 0.5 * rng.uniform();
+    const auto c = grid.coords_of(x, y, z);
+    ASSERT_TRUE(grid.in_range(c[0], c[1], c[2]));
+    // The cell is where the point is, up to rounding at the faces.
+    const double slack = 1e-12;
+    ASSERT_GE(x, box.lo[0] + c[0] * grid.cell_width()[0] - slack);
+    ASSERT_LE(x, box.lo[0] + (c[0] + 1) * grid.cell_width()[0] + slack);
+    ASSERT_GE(z, box.lo[2] + c[2] * grid.cell_width()[2] - slack);
+    ASSERT_LE(z, box.lo[2] + (c[2] + 1) * grid.cell_width()[2] + slack);
+  }
+  int previous = 0;
+  for (double x = -1.0; x <= 2.0; x += 1e-4) {
+    const int c = grid.coords_of(x, 0.5, 5.2)[0];
+    ASSERT_GE(c, previous);
+    ASSERT_LE(c, previous + 1);
+    previous = c;
+  }
+  EXPECT_FALSE(grid.in_range(-1, 0, 0));
+  EXPECT_FALSE(grid.in_range(0, grid.dims()[1], 0));
+  EXPECT_TRUE(grid.in_range(grid.dims()[0] - 1, grid.dims()[1] - 1, grid.dims()[2] - 1));
+}
+
+TEST(CellGrid, LinearKeysAreTheZYXOrder) {
+  const CellGrid grid(Box{{0, 0, 0}, {1, 2, 3}}, 0.24, CellNumbering::kLinear);
+  const Dims dims = grid.dims();
+  ASSERT_EQ(dims, (Dims{4, 8, 12}));
+  EXPECT_EQ(grid.key_count(), grid.cell_count());
+  std::uint32_t expected = 0;
+  for (int cz = 0; cz < dims[2]; ++cz) {
+    for (int cy = 0; cy < dims[1]; ++cy) {
+      for (int cx = 0; cx < dims[0]; ++cx) ASSERT_EQ(grid.key(cx, cy, cz), expected++);
+    }
+  }
+}
+
+TEST(CellGrid, MortonKeysAreDistinctAndInterleaved) {
+  for (const double d : {0.3, 0.1, 1.0 / 33.0, 1.0 / 200.0}) {
+    const CellGrid grid(Box{}, d, CellNumbering::kMorton);
+    const Dims dims = grid.dims();
+    // key_count is the power of 8 covering the largest axis.
+    int bits = 0;
+    while ((1 << bits) < dims[0]) ++bits;
+    EXPECT_EQ(grid.key_count(), std::uint64_t{1} << (3 * bits)) << "D = " << d;
+    EXPECT_GE(grid.key_count(), grid.cell_count());
+    std::set<std::uint32_t> keys;
+    for (int cz = 0; cz < dims[2]; cz += (dims[2] > 40 ? 7 : 1)) {
+      for (int cy = 0; cy < dims[1]; cy += (dims[1] > 40 ? 5 : 1)) {
+        for (int cx = 0; cx < dims[0]; ++cx) {
+          const std::uint32_t key = grid.key(cx, cy, cz);
+          ASSERT_LT(key, grid.key_count());
+          ASSERT_TRUE(keys.insert(key).second) << "duplicate key";
+          // Bit b of cx is key bit 3b, of cy 3b + 1, of cz 3b + 2.
+          for (int b = 0; b < bits; ++b) {
+            ASSERT_EQ((key >> (3 * b)) & 1u, std::uint32_t((cx >> b) & 1));
+            ASSERT_EQ((key >> (3 * b + 1)) & 1u, std::uint32_t((cy >> b) & 1));
+            ASSERT_EQ((key >> (3 * b + 2)) & 1u, std::uint32_t((cz >> b) & 1));
+          }
+        }
+      }
+    }
+  }
+  EXPECT_EQ(CellGrid(Box{}, 0.3, CellNumbering::kMorton).key(1, 1, 1), 7u);
+  EXPECT_EQ(CellGrid(Box{}, 0.3, CellNumbering::kMorton).key(2, 0, 0), 8u);
+}
+
+// The counting sort: every particle in exactly one slot, in the range of its own cell.
+void check_registry(const CellGrid& grid, const Scene& scene) {
+  CellRegistry registry;
+  registry.assign(grid, scene);
+  const std::size_t n = scene.size();
+  ASSERT_EQ(registry.cell_begin.size(), grid.key_count() + 1);
+  ASSERT_EQ(registry.cell_begin.front(), 0u);
+  ASSERT_EQ(registry.cell_begin.back(), n);
+  ASSERT_TRUE(std::is_sorted(registry.cell_begin.begin(), registry.cell_begin.end()));
+  ASSERT_EQ(registry.slot_particle.size(), n);
+  ASSERT_EQ(registry.particle_slot.size(), n);
+  std::vector<int> seen(n, 0);
+  for (std::size_t s = 0; s < n; ++s) {
+    ASSERT_LT(registry.slot_particle[s], n);
+    ++seen[registry.slot_particle[s]];
+    ASSERT_EQ(registry.particle_slot[registry.slot_particle[s]], s);
+  }
+  for (std::size_t i = 0; i < n; ++i) ASSERT_EQ(seen[i], 1) << "particle " << i;
+  std::vector<std::uint32_t> count(grid.key_count(), 0);
+  for (std::size_t i = 0; i < n; ++i) {
+    const auto c = grid.coords_of(scene.x[i], scene.y[i], scene.z[i]);
+    const std::uint32_t key = grid.key(c[0], c[1], c[2]);
+    ++count[key];
+    const std::uint32_t slot = registry.particle_slot[i];
+    ASSERT_GE(slot, registry.cell_begin[key]);
+    ASSERT_LT(slot, registry.cell_begin[key + 1]);
+  }
+  std::uint32_t largest = 0;
+  for (std::uint64_t k = 0; k < grid.key_count(); ++k) {
+    ASSERT_EQ(registry.cell_begin[k + 1] - registry.cell_begin[k], count[k]) << "key " << k;
+    largest = std::max(largest, count[k]);
+    // Sorted by key stably: within a cell, input order.
+    for (std::uint32_t s = registry.cell_begin[k] + 1; s < registry.cell_begin[k + 1]; ++s) {
+      ASSERT_LT(registry.slot_particle[s - 1], registry.slot_particle[s]) << "key " << k;
+    }
+  }
+  EXPECT_EQ(registry.max_occupancy, largest);
+
+  // With a `sorted` output: the same registration, and the particles copied in slot order.
+  CellRegistry with_copy;
+  Scene sorted;
+  with_copy.assign(grid, scene, &sorted);
+  EXPECT_TRUE(std::equal(with_copy.cell_begin.begin(), with_copy.cell_begin.end(),
+                         registry.cell_begin.begin(), registry.cell_begin.end()));
+  EXPECT_TRUE(std::equal(with_copy.slot_particle.begin(), with_copy.slot_particle.end(),
+                         registry.slot_particle.begin(), registry.slot_particle.end()));
+  EXPECT_EQ(with_copy.max_occupancy, registry.max_occupancy);
+  ASSERT_EQ(sorted.size(), n);
+  ASSERT_EQ(sorted.diameter.size(), scene.diameter.size());
+  EXPECT_EQ(sorted.box.lo, scene.box.lo);
+  EXPECT_EQ(sorted.box.hi, scene.box.hi);
+  for (std::size_t s = 0; s < n; ++s) {
+    const std::uint32_t i = registry.slot_particle[s];
+    ASSERT_EQ(sorted.x[s], scene.x[i]);
+    ASSERT_EQ(sorted.y[s], scene.y[i]);
+    ASSERT_EQ(sorted.z[s], scene.z[i]);
+    if (scene.has_diameters()) {
+      ASSERT_EQ(sorted.diameter[s], scene.diameter[i]);
+    }
+  }
+}
+
+TEST(CellRegistry, CountingSortInvariants) {
+  for (const auto kind : all_scene_kinds()) {
+    SceneSpec spec;
+    spec.kind = kind;
+    spec.n = 5000;
+    spec.seed = 6;
+    const Scene scene = generate_scene(spec);
+    for (const double d : {0.02, 0.1, 0.6}) {
+      for (const auto numbering : {CellNumbering::kLinear, CellNumbering::kMorton}) {
+        SCOPED_TRACE(std::string(to_string(kind)) + " D = " + std::to_string(d));
+        check_registry(CellGrid(scene.box, d, numbering), scene);
+      }
+    }
+  }
+}
+
+TEST(CellRegistry, EdgeCases) {
+  const CellGrid grid(Box{}, 0.1, CellNumbering::kLinear);
+  check_registry(grid, Scene{});
+  check_registry(grid, make_scene({{1, 1, 1}}));
+  check_registry(grid, make_scene({{0.5, 0.5, 0.5}, {0.5, 0.5, 0.5}, {0.5, 0.5, 0.5}, {1, 1, 1}}));
+  CellRegistry registry;
+  registry.assign(grid, make_scene({{0.5, 0.5, 0.5}, {0.5, 0.5, 0.5}, {0.5, 0.5, 0.5}, {1, 1, 1}}));
+  EXPECT_EQ(registry.max_occupancy, 3u);
+  registry.assign(grid, Scene{});
+  EXPECT_EQ(registry.max_occupancy, 0u);
+  // A sorted copy into a scene that held something else replaces it entirely.
+  Scene sorted = make_scene({{0.1, 0.1, 0.1}, {0.2, 0.2, 0.2}, {0.3, 0.3, 0.3}, {0.4, 0.4, 0.4}});
+  sorted.diameter = {1, 2, 3, 4};
+  registry.assign(grid, make_scene({{0.9, 0.9, 0.9}, {0.05, 0.05, 0.05}}), &sorted);
+  EXPECT_EQ(sorted.x, (std::vector<double>{0.05, 0.9}));
+  EXPECT_TRUE(sorted.diameter.empty());
+  // Reassigning with a bigger then a smaller scene leaves no stale entries.
+  SceneSpec spec;
+  spec.n = 3000;
+  registry.assign(grid, generate_scene(spec));
+  const Scene small = make_scene({{0.05, 0.05, 0.05}, {0.95, 0.95, 0.95}});
+  registry.assign(grid, small);
+  EXPECT_EQ(registry.slot_particle.size(), 2u);
+  EXPECT_EQ(registry.cell_begin.back(), 2u);
+  EXPECT_EQ(registry.max_occupancy, 1u);
+}
+
+}  // namespace
+}  // namespace contactlab::test

@@ -1,0 +1,191 @@
+// Every variant (loop x order x stencil x schedule x precision from all_variants({1, 7, 64})) on
+// every scene kind with 1, 2 and 3 threads must reproduce the O(N^2) brute force exactly, and
+// report the same pair and candidate counts. Double variants are compared with
+// brute_force_contacts; float variants with the same brute force evaluated in float
+// (float_brute_force), and their differences from the double result must all be pairs within
+// float rounding of touching.
+//
+// One test per (scene kind, loop, order, stencil, precision); each runs the 10 schedules x 3
+// thread counts.
+#include <gtest/gtest.h>
+
+#include <map>
+#include <string>
+#include <tuple>
+
+#include "test_support.hpp"
+
+namespace contactlab::test {
+namespace {
+
+struct KindSetup {
+  SceneSpec spec;
+  double diameter;  // detector D (ignored for polydisperse scenes)
+};
+
+// N and D chosen for a few thousand contacts and cells holding several particles each
+// (max occupancy 6 to 30), while each detection stays around a millisecond.
+KindSetup setup_for(SceneKind kind) {
+  KindSetup setup;
+  setup.spec.kind = kind;
+  setup.spec.seed = 20240601;
+  switch (kind) {
+    case SceneKind::kUniform:
+      setup.spec.n = 2000;
+      setup.spec.diameter = 0.08;
+      break;
+    case SceneKind::kClustered:
+      setup.spec.n = 2500;
+      setup.spec.diameter = 0.03;
+      setup.spec.core = 0.5;
+      setup.spec.background = 0.2;
+      break;
+    case SceneKind::kBlobs:
+      setup.spec.n = 2500;
+      setup.spec.diameter = 0.03;
+      setup.spec.core = 0.5;
+      setup.spec.background = 0.2;
+      break;
+    case SceneKind::kPolydisperse:
+      setup.spec.n = 2000;
+      setup.spec.diameter = 0.1;
+      setup.spec.size_ratio = 4.0;
+      break;
+  }
+  setup.diameter = setup.spec.diameter;
+  return setup;
+}
+
+struct Reference {
+  Scene scene;
+  double diameter = 0.0;
+  ContactList contacts;        // double
+  ContactList float_contacts;  // float
+  std::uint64_t full_candidates = 0;
+};
+
+const Reference& reference_for(SceneKind kind) {
+  static std::map<SceneKind, Reference> cache;
+  auto it = cache.find(kind);
+  if (it == cache.end()) {
+    const KindSetup setup = setup_for(kind);
+    Reference ref;
+    ref.scene = generate_scene(setup.spec);
+    ref.diameter = setup.diameter;
+    ref.contacts = brute_force_contacts(ref.scene, ref.diameter);
+    ref.float_contacts = float_brute_force(ref.scene, ref.diameter);
+    ref.full_candidates = expected_full_candidates(ref.scene, ref.diameter);
+    it = cache.emplace(kind, std::move(ref)).first;
+  }
+  return it->second;
+}
+
+TEST(BruteForceReference, ScenesAreInterestingEnough) {
+  for (const auto kind : all_scene_kinds()) {
+    SCOPED_TRACE(std::string(to_string(kind)));
+    const Reference& ref = reference_for(kind);
+    EXPECT_TRUE(well_formed(ref.contacts));
+    EXPECT_TRUE(well_formed(ref.float_contacts));
+    EXPECT_TRUE(float_errors_near_contact_distance(ref.scene, ref.diameter, ref.float_contacts, ref.contacts));
+    EXPECT_GE(ref.scene.size(), 1500u);
+    EXPECT_LE(ref.scene.size(), 3000u);
+    // Plenty of contacts, and cells holding several particles.
+    EXPECT_GE(ref.contacts.pair_count(), 2000u);
+    const Detected d = detect(ref.scene, Variant{}, ref.diameter, 1);
+    EXPECT_GE(d.run.max_cell_occupancy, 6u);
+    EXPECT_EQ(ref.scene.has_diameters(), kind == SceneKind::kPolydisperse);
+  }
+}
+
+using Params = std::tuple<SceneKind, LoopKind, Order, Stencil, Precision>;
+
+class EveryVariantMatchesBruteForce : public ::testing::TestWithParam<Params> {};
+
+TEST_P(EveryVariantMatchesBruteForce, AllSchedulesAndThreadCounts) {
+  const auto [kind, loop, order, stencil, precision] = GetParam();
+  const Reference& ref = reference_for(kind);
+  const ContactList& expected = precision == Precision::kDouble ? ref.contacts : ref.float_contacts;
+  const std::uint64_t expected_candidates =
+      stencil == Stencil::kFull ? ref.full_candidates : ref.full_candidates / 2;
+  const CellGrid grid(ref.scene.box, ref.scene.has_diameters() ? ref.scene.max_diameter() : ref.diameter,
+                      CellNumbering::kLinear);
+
+  int runs = 0;
+  for (const Variant& variant : every_variant()) {
+    if (variant.loop != loop || variant.order != order || variant.stencil != stencil ||
+        variant.precision != precision) {
+      continue;
+    }
+    for (const int threads : {1, 2, 3}) {
+      SCOPED_TRACE(to_string(variant) + " threads=" + std::to_string(threads));
+      const Detected d = detect(ref.scene, variant, ref.diameter, threads);
+      ++runs;
+      EXPECT_TRUE(same_contacts(d.contacts, expected));
+      EXPECT_EQ(d.run.contact_pairs, expected.pair_count());
+      // The same for every schedule and thread count, and (full) twice the half stencil's.
+      EXPECT_EQ(d.run.candidate_tests, expected_candidates);
+      EXPECT_EQ(d.run.threads, threads);
+      EXPECT_EQ(d.run.thread_busy_s.size(), static_cast<std::size_t>(threads));
+      EXPECT_EQ(d.run.grid_dims, grid.dims());
+    }
+  }
+  EXPECT_EQ(runs, 30);  // 10 schedules x 3 thread counts
+  if (precision == Precision::kFloat) {
+    EXPECT_TRUE(float_errors_near_contact_distance(ref.scene, ref.diameter, expected, ref.contacts));
+  }
+}
+
+std::string param_name(const ::testing::TestParamInfo<Params>& info) {
+  const auto [kind, loop, order, stencil, precision] = info.param;
+  return std::string(to_string(kind)) + "_" + std::string(to_string(loop)) + "_" +
+         std::string(to_string(order)) + "_" + std::string(to_string(stencil)) + "_" +
+         std::string(to_string(precision));
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Kernels, EveryVariantMatchesBruteForce,
+    ::testing::Combine(::testing::Values(SceneKind::kUniform, SceneKind::kClustered,
+                                         SceneKind::kBlobs, SceneKind::kPolydisperse),
+                       ::testing::Values(LoopKind::kCell, LoopKind::kParticle),
+                       ::testing::Values(Order::kUnsorted, Order::kSorted, Order::kMorton),
+                       ::testing::Values(Stencil::kFull, Stencil::kHalf),
+                       ::testing::Values(Precision::kDouble, Precision::kFloat)),
+    param_name);
+
+// The candidate count does not depend on the loop or the order either, and the full stencil
+// makes exactly twice the half stencil's tests (each unordered pair once from each side).
+TEST(CandidateTests, FullIsTwiceHalfForEveryLoopAndOrder) {
+  const Reference& ref = reference_for(SceneKind::kBlobs);
+  ASSERT_EQ(ref.full_candidates % 2, 0u);
+  for (const auto precision : {Precision::kDouble, Precision::kFloat}) {
+    for (const auto loop : {LoopKind::kCell, LoopKind::kParticle}) {
+      for (const auto order : {Order::kUnsorted, Order::kSorted, Order::kMorton}) {
+        const Schedule schedule{ScheduleKind::kStatic, 0};
+        const Detected full =
+            detect(ref.scene, Variant{loop, order, Stencil::kFull, schedule, precision}, ref.diameter, 1);
+        const Detected half =
+            detect(ref.scene, Variant{loop, order, Stencil::kHalf, schedule, precision}, ref.diameter, 1);
+        EXPECT_EQ(full.run.candidate_tests, 2 * half.run.candidate_tests)
+            << to_string(loop) << "/" << to_string(order) << "/" << to_string(precision);
+        EXPECT_EQ(full.run.candidate_tests, ref.full_candidates);
+      }
+    }
+  }
+}
+
+// The brute force itself, on a case small enough to check by hand.
+TEST(BruteForceReference, HandCheckedTriangle) {
+  // 0-1 at distance 1 (touching, D = 1), 1-2 at distance 0.5, 0-2 at distance 1.5.
+  const Scene scene = make_scene({{0.0, 0.0, 0.0}, {1.0, 0.0, 0.0}, {1.5, 0.0, 0.0}},
+                                 Box{{0, 0, 0}, {2, 2, 2}});
+  const ContactList got = brute_force_contacts(scene, 1.0);
+  EXPECT_TRUE(same_contacts(got, list_from_pairs(3, {{0, 1}, {1, 2}})));
+  // Per-particle diameters: (d0 + d2) / 2 = 1.5 just reaches particle 2, (d1 + d2) / 2 = 1.25
+  // reaches it too, (d0 + d1) / 2 = 0.75 < 1 does not reach; the scalar D is ignored.
+  Scene poly = scene;
+  poly.diameter = {1.0, 0.5, 2.0};
+  EXPECT_TRUE(same_contacts(brute_force_contacts(poly, 123.0), list_from_pairs(3, {{0, 2}, {1, 2}})));
+}
+
+}  // namespace
+}  // namespace contactlab::test

@@ -1,0 +1,346 @@
+// Helpers shared by the kernel tests: building scenes by hand, comparing contact lists with
+// readable diagnostics, an independent count of the candidate pair tests, temporary folders.
+#pragma once
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <array>
+#include <cstdint>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <sstream>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "contactlab/kernels/brute_force.hpp"
+#include "contactlab/kernels/cell_grid.hpp"
+#include "contactlab/kernels/contact_list.hpp"
+#include "contactlab/kernels/detector.hpp"
+#include "contactlab/kernels/pair_test.hpp"
+#include "contactlab/kernels/rng.hpp"
+#include "contactlab/kernels/scene.hpp"
+#include "contactlab/kernels/scene_generate.hpp"
+#include "contactlab/kernels/variant.hpp"
+
+namespace contactlab::test {
+
+using Point = std::array<double, 3>;
+
+inline Scene make_scene(const std::vector<Point>& points, const Box& box = Box{}) {
+  Scene scene;
+  scene.box = box;
+  scene.reserve(points.size());
+  for (const auto& p : points) {
+    scene.x.push_back(p[0]);
+    scene.y.push_back(p[1]);
+    scene.z.push_back(p[2]);
+  }
+  return scene;
+}
+
+// The variants every equivalence test runs: 2 loops x 3 orders x 2 stencils x 10 schedules x
+// 2 precisions.
+inline std::vector<Variant> every_variant() { return enumerate(all_variants({1, 7, 64})); }
+
+// A few variants that between them cover every loop, order, stencil and precision (for the
+// expensive hard cases, where running all of them would cost time without covering more code).
+inline std::vector<Variant> covering_variants() {
+  std::vector<Variant> variants;
+  for (const auto precision : {Precision::kDouble, Precision::kFloat}) {
+    for (const auto loop : {LoopKind::kCell, LoopKind::kParticle}) {
+      for (const auto order : {Order::kUnsorted, Order::kSorted, Order::kMorton}) {
+        for (const auto stencil : {Stencil::kFull, Stencil::kHalf}) {
+          variants.push_back(
+              Variant{loop, order, stencil, Schedule{ScheduleKind::kDynamic, 7}, precision});
+        }
+      }
+    }
+  }
+  return variants;
+}
+
+inline std::vector<Variant> only(std::vector<Variant> variants, Precision precision) {
+  std::erase_if(variants, [&](const Variant& v) { return v.precision != precision; });
+  return variants;
+}
+
+// The single-precision reference: the brute force of brute_force.hpp with the same pair test
+// (pair_test.hpp) evaluated in float on coordinates, diameters and D rounded to float, which is
+// what variant.hpp says the float variants compute.
+inline ContactList float_brute_force(const Scene& scene, double diameter) {
+  const std::size_t n = scene.size();
+  std::vector<float> x(n), y(n), z(n), d(scene.diameter.size());
+  for (std::size_t i = 0; i < n; ++i) {
+    x[i] = static_cast<float>(scene.x[i]);
+    y[i] = static_cast<float>(scene.y[i]);
+    z[i] = static_cast<float>(scene.z[i]);
+    if (scene.has_diameters()) d[i] = static_cast<float>(scene.diameter[i]);
+  }
+  const float fd = static_cast<float>(diameter);
+  const float reach_sq = fd * fd;
+  ContactList list;
+  list.offsets.assign(n + 1, 0);
+  for (std::size_t i = 0; i < n; ++i) {
+    for (std::size_t j = 0; j < n; ++j) {
+      if (i == j) continue;
+      const float dx = x[i] - x[j], dy = y[i] - y[j], dz = z[i] - z[j];
+      const bool touching = scene.has_diameters() ? in_contact(dx, dy, dz, d[i], d[j])
+                                                  : in_contact(dx, dy, dz, reach_sq);
+      if (touching) list.partners.push_back(static_cast<std::uint32_t>(j));
+    }
+    list.offsets[i + 1] = list.partners.size();
+  }
+  return list;
+}
+
+// How far from the contact distance a pair may be and still be judged differently in float:
+// rounding a coordinate of magnitude <= M to float moves it by <= 2^-24 M, so a distance moves
+// by <= sqrt(3) 2^-23 M, plus a few float roundings of the distance itself (D, squares, sum).
+inline double float_tolerance(const Scene& scene, double reach) {
+  double m = 0.0;
+  for (int axis = 0; axis < 3; ++axis) {
+    m = std::max({m, std::abs(scene.box.lo[axis]), std::abs(scene.box.hi[axis])});
+  }
+  return 2.0 * (std::sqrt(3.0) * 0x1.0p-23 * m + 0x1.0p-20 * reach);
+}
+
+// Every pair on which `got` (a float variant's canonical contacts) and `exact` (the double
+// reference) disagree is within float_tolerance of touching.
+inline ::testing::AssertionResult float_errors_near_contact_distance(const Scene& scene, double diameter,
+                                                                     const ContactList& got,
+                                                                     const ContactList& exact) {
+  if (got.particle_count() != exact.particle_count()) {
+    return ::testing::AssertionFailure() << "particle count differs";
+  }
+  int bad = 0;
+  auto failure = ::testing::AssertionFailure();
+  for (std::size_t i = 0; i < exact.particle_count(); ++i) {
+    const auto a = got.partners_of(i);
+    const auto b = exact.partners_of(i);
+    std::vector<std::uint32_t> differ;
+    std::set_symmetric_difference(a.begin(), a.end(), b.begin(), b.end(), std::back_inserter(differ));
+    for (const std::uint32_t j : differ) {
+      const double dx = scene.x[i] - scene.x[j], dy = scene.y[i] - scene.y[j], dz = scene.z[i] - scene.z[j];
+      const double r = std::sqrt(dx * dx + dy * dy + dz * dz);
+      const double reach = scene.has_diameters() ? 0.5 * (scene.diameter[i] + scene.diameter[j]) : diameter;
+      const double tolerance = float_tolerance(scene, reach);
+      if (std::abs(r - reach) > tolerance) {
+        if (bad < 5) {
+          failure << "\n  pair " << i << "-" << j << " at distance " << r << " (reach " << reach
+                  << ", |r - reach| / reach = " << std::abs(r - reach) / reach << ", tolerance "
+                  << tolerance / reach << ") judged "
+                  << (std::binary_search(a.begin(), a.end(), j) ? "in contact" : "not in contact") << " in float";
+        }
+        ++bad;
+      }
+    }
+  }
+  if (bad == 0) return ::testing::AssertionSuccess();
+  return failure << "\n  " << bad << " misjudged pair entries far from the contact distance";
+}
+
+struct Detected {
+  DetectRun run;
+  ContactList contacts;  // canonical
+};
+
+inline Detected detect(const Scene& scene, const Variant& variant, double diameter, int threads) {
+  ContactDetector detector;
+  DetectOptions options;
+  options.variant = variant;
+  options.diameter = diameter;
+  options.threads = threads;
+  Detected result;
+  result.run = detector.run(scene, options);
+  result.contacts = detector.canonical_contacts();
+  return result;
+}
+
+inline std::string row_text(const ContactList& list, std::size_t i) {
+  std::ostringstream out;
+  out << "[";
+  const auto row = list.partners_of(i);
+  for (std::size_t k = 0; k < row.size() && k < 12; ++k) out << (k ? " " : "") << row[k];
+  if (row.size() > 12) out << " ... (" << row.size() << " partners)";
+  out << "]";
+  return out.str();
+}
+
+// Exact equality of two canonical contact lists, reporting the first rows that differ.
+inline ::testing::AssertionResult same_contacts(const ContactList& got, const ContactList& want) {
+  if (got == want) return ::testing::AssertionSuccess();
+  auto failure = ::testing::AssertionFailure();
+  if (got.particle_count() != want.particle_count()) {
+    return failure << "particle count " << got.particle_count() << " != expected "
+                   << want.particle_count();
+  }
+  failure << "contact lists differ: " << got.pair_count() << " pairs (" << got.partners.size()
+          << " entries) vs expected " << want.pair_count() << " pairs (" << want.partners.size()
+          << " entries)";
+  int shown = 0;
+  for (std::size_t i = 0; i < want.particle_count() && shown < 5; ++i) {
+    const auto a = got.partners_of(i);
+    const auto b = want.partners_of(i);
+    if (!std::equal(a.begin(), a.end(), b.begin(), b.end())) {
+      failure << "\n  particle " << i << ": got " << row_text(got, i) << ", expected "
+              << row_text(want, i);
+      ++shown;
+    }
+  }
+  return failure;
+}
+
+// CSR well formed, rows strictly ascending, no self-contacts, and symmetric: j in row i iff i
+// in row j.
+inline ::testing::AssertionResult well_formed(const ContactList& list) {
+  const std::size_t n = list.particle_count();
+  if (list.offsets.empty() || list.offsets.front() != 0 || list.offsets.back() != list.partners.size()) {
+    return ::testing::AssertionFailure() << "offsets do not span the partner array";
+  }
+  if (list.partners.size() % 2 != 0) {
+    return ::testing::AssertionFailure() << "odd number of partner entries " << list.partners.size();
+  }
+  for (std::size_t i = 0; i < n; ++i) {
+    if (list.offsets[i + 1] < list.offsets[i]) {
+      return ::testing::AssertionFailure() << "offsets decrease at " << i;
+    }
+    const auto row = list.partners_of(i);
+    for (std::size_t k = 0; k < row.size(); ++k) {
+      const std::uint32_t j = row[k];
+      if (j >= n) return ::testing::AssertionFailure() << "row " << i << " names particle " << j;
+      if (j == i) return ::testing::AssertionFailure() << "self-contact of particle " << i;
+      if (k > 0 && row[k - 1] >= j) {
+        return ::testing::AssertionFailure() << "row " << i << " not strictly ascending";
+      }
+      const auto back = list.partners_of(j);
+      if (!std::binary_search(back.begin(), back.end(), static_cast<std::uint32_t>(i))) {
+        return ::testing::AssertionFailure()
+               << "asymmetric: " << j << " in row " << i << " but not " << i << " in row " << j;
+      }
+    }
+  }
+  return ::testing::AssertionSuccess();
+}
+
+// Pair tests the full 27-cell stencil makes for each particle, counted independently of the
+// detector: the particles of the (up to) 27 cells around its cell, less itself. The half
+// stencil makes exactly half as many in total.
+inline std::vector<std::uint64_t> expected_full_candidates_per_particle(const Scene& scene, double diameter) {
+  const double width = scene.has_diameters() ? scene.max_diameter() : diameter;
+  const CellGrid grid(scene.box, width, CellNumbering::kLinear);
+  const auto dims = grid.dims();
+  std::vector<std::uint64_t> count(grid.cell_count(), 0);
+  std::vector<std::array<int, 3>> cell(scene.size());
+  for (std::size_t i = 0; i < scene.size(); ++i) {
+    cell[i] = grid.coords_of(scene.x[i], scene.y[i], scene.z[i]);
+    ++count[grid.key(cell[i][0], cell[i][1], cell[i][2])];
+  }
+  std::vector<std::uint64_t> tests(scene.size(), 0);
+  for (std::size_t i = 0; i < scene.size(); ++i) {
+    for (int dz = -1; dz <= 1; ++dz) {
+      for (int dy = -1; dy <= 1; ++dy) {
+        for (int dx = -1; dx <= 1; ++dx) {
+          const int cx = cell[i][0] + dx, cy = cell[i][1] + dy, cz = cell[i][2] + dz;
+          if (cx < 0 || cy < 0 || cz < 0 || cx >= dims[0] || cy >= dims[1] || cz >= dims[2]) continue;
+          tests[i] += count[grid.key(cx, cy, cz)];
+        }
+      }
+    }
+    tests[i] -= 1;  // not itself
+  }
+  return tests;
+}
+
+inline std::uint64_t expected_full_candidates(const Scene& scene, double diameter) {
+  std::uint64_t total = 0;
+  for (const auto t : expected_full_candidates_per_particle(scene, diameter)) total += t;
+  return total;
+}
+
+// A permutation of 0..n-1 from a fixed seed (Fisher-Yates on xoshiro: the same on every
+// standard library, unlike std::shuffle).
+inline std::vector<std::uint32_t> permutation(std::size_t n, std::uint64_t seed) {
+  std::vector<std::uint32_t> perm(n);
+  for (std::size_t i = 0; i < n; ++i) perm[i] = static_cast<std::uint32_t>(i);
+  Xoshiro256 rng(seed);
+  for (std::size_t i = n; i > 1; --i) {
+    const std::size_t j = static_cast<std::size_t>(rng.next() % i);
+    std::swap(perm[i - 1], perm[j]);
+  }
+  return perm;
+}
+
+// Canonical contact list from a set of unordered pairs.
+inline ContactList list_from_pairs(std::size_t n,
+                                   const std::vector<std::pair<std::uint32_t, std::uint32_t>>& pairs) {
+  std::vector<std::vector<std::uint32_t>> rows(n);
+  for (const auto& [i, j] : pairs) {
+    rows[i].push_back(j);
+    rows[j].push_back(i);
+  }
+  ContactList list;
+  list.offsets.assign(n + 1, 0);
+  for (std::size_t i = 0; i < n; ++i) {
+    std::sort(rows[i].begin(), rows[i].end());
+    list.offsets[i + 1] = list.offsets[i] + rows[i].size();
+    list.partners.insert(list.partners.end(), rows[i].begin(), rows[i].end());
+  }
+  return list;
+}
+
+// A fresh empty folder under the test temporary directory, removed at the end of its scope.
+class TempDir {
+ public:
+  TempDir() {
+    namespace fs = std::filesystem;
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    std::string name = "contactlab_";
+    if (info) name += std::string(info->test_suite_name()) + "_" + info->name();
+    for (auto& c : name) {
+      if (!std::isalnum(static_cast<unsigned char>(c)) && c != '_') c = '_';
+    }
+    name += "_" + std::to_string(::getpid());  // two builds may run the same test at once
+    path_ = fs::path(::testing::TempDir()) / name;
+    fs::remove_all(path_);
+    fs::create_directories(path_);
+  }
+  ~TempDir() {
+    std::error_code ignored;
+    std::filesystem::remove_all(path_, ignored);
+  }
+  TempDir(const TempDir&) = delete;
+  TempDir& operator=(const TempDir&) = delete;
+
+  const std::filesystem::path& path() const { return path_; }
+  std::string file(const std::string& name) const { return (path_ / name).string(); }
+  // Names of the entries in the folder, sorted.
+  std::vector<std::string> entries() const {
+    std::vector<std::string> names;
+    for (const auto& entry : std::filesystem::directory_iterator(path_)) {
+      names.push_back(entry.path().filename().string());
+    }
+    std::sort(names.begin(), names.end());
+    return names;
+  }
+
+ private:
+  std::filesystem::path path_;
+};
+
+inline void write_text(const std::string& path, const std::string& text) {
+  std::ofstream out(path, std::ios::binary | std::ios::trunc);
+  out << text;
+}
+
+inline std::string read_text(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
+
+}  // namespace contactlab::test
