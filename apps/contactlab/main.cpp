@@ -18,6 +18,8 @@
 #include "contactlab/tuner/measure.hpp"
 #include "contactlab/tuner/papi_counters.hpp"
 #include "contactlab/tuner/result_schema.hpp"
+#include "contactlab/tuner/sweep.hpp"
+#include "contactlab/tuner/tune.hpp"
 
 namespace cl = contactlab;
 namespace tn = contactlab::tuner;
@@ -139,6 +141,7 @@ struct DetectCommand {
   std::string papi_events;
   std::string cache_sim;
   bool cache_sim_child = false;
+  std::string cache_file;  // tuning cache for --variant auto
   std::string contacts_out;
   std::string json_out;
 };
@@ -190,6 +193,37 @@ int command_cache_sim_child(const SceneOptions& scene_options, const cl::Variant
   return 0;
 }
 
+tn::Calibration machine_calibration(tn::TuningCache& cache, const tn::TuneOptions& options, int threads,
+                                    bool recalibrate) {
+  if (!recalibrate) {
+    if (auto cached = cache.calibration()) return *cached;
+  }
+  fmt::print(stderr, "contactlab: calibrating the cost model on this machine (once; cached in {})...\n",
+             cache.path());
+  tn::Calibration calibration = tn::calibrate_machine(options, threads);
+  cache.store_calibration(calibration);
+  return calibration;
+}
+
+// `--variant auto`: the tuning cache's choice for this machine, build, scene and thread count;
+// on a miss the tuner's search chooses, and the choice is cached.
+cl::Variant auto_variant(const cl::Scene& scene, const tn::SceneRecord& record, double diameter, int threads,
+                         const std::string& cache_file, const std::string& command_line) {
+  tn::TuningCache cache(cache_file.empty() ? tn::TuningCache::default_path() : cache_file);
+  if (auto cached = cache.choice(record, diameter, threads)) {
+    fmt::print(stderr, "contactlab: --variant auto: {} (from {})\n", cl::to_string(*cached), cache.path());
+    return *cached;
+  }
+  tn::TuneOptions options;
+  options.threads = threads;
+  const tn::Calibration calibration = machine_calibration(cache, options, threads, false);
+  fmt::print(stderr, "contactlab: --variant auto: no cached choice, tuning...\n");
+  const tn::TuneReport report = tn::tune(scene, record, diameter, options, calibration, command_line);
+  cache.store_choice(record, diameter, threads, report.chosen, 0.0);
+  fmt::print(stderr, "contactlab: --variant auto: {} (stored in {})\n", cl::to_string(report.chosen), cache.path());
+  return report.chosen;
+}
+
 int command_detect(const SceneOptions& scene_options, const DetectCommand& command,
                    const std::string& command_line) {
   if (command.repeat < 1) throw cl::InputError("--repeat must be >= 1");
@@ -202,9 +236,14 @@ int command_detect(const SceneOptions& scene_options, const DetectCommand& comma
     if (!(command.time_budget > 0.0)) throw cl::InputError("--time-budget must be > 0 seconds");
     if (command.max_repeat < command.repeat) throw cl::InputError("--max-repeat must be >= --repeat");
   }
-  const cl::Variant variant = cl::parse_variant(command.variant);
+  const bool automatic = command.variant == "auto";
   const int threads = command.threads > 0 ? command.threads : omp_get_max_threads();
-  if (command.cache_sim_child) return command_cache_sim_child(scene_options, variant, threads);
+  if (command.cache_sim_child) {
+    return command_cache_sim_child(scene_options, cl::parse_variant(command.variant), threads);
+  }
+  if (automatic && !command.cache_sim.empty()) {
+    throw cl::InputError("--cache-sim needs an explicit --variant (not auto)");
+  }
 
   std::optional<tn::CacheGeometry> geometry;
   if (!command.cache_sim.empty()) geometry = tn::parse_cache_geometry(command.cache_sim);
@@ -215,6 +254,9 @@ int command_detect(const SceneOptions& scene_options, const DetectCommand& comma
     papi.emplace(command.papi_events.empty() ? std::vector<std::string>{} : split_list(command.papi_events));
   }
   auto [scene, scene_record] = scene_options.load();
+  const cl::Variant variant = automatic ? auto_variant(scene, scene_record, scene_options.diameter, threads,
+                                                       command.cache_file, command_line)
+                                        : cl::parse_variant(command.variant);
 
   tn::ResultFile result;
   result.context = tn::collect_context(command_line, threads);
@@ -270,6 +312,72 @@ int command_detect(const SceneOptions& scene_options, const DetectCommand& comma
   result.runs.push_back(std::move(run));
   if (!command.json_out.empty()) tn::write_result_file(command.json_out, result);
   return ok ? 0 : 1;
+}
+
+int command_sweep(const std::string& config, const tn::SweepOptions& options) {
+  const tn::Experiment experiment = tn::read_experiment(config);
+  const tn::SweepSummary summary = tn::run_sweep(experiment, options);
+  fmt::print("{}: {} points, {} already done, {} ok, {} invalid, {} failed, {:.1f} s -> {}\n",
+             experiment.name, summary.points, summary.skipped, summary.ok, summary.invalid, summary.failed,
+             summary.seconds, options.out);
+  return summary.failed || summary.invalid ? 1 : 0;
+}
+
+struct TuneCommand {
+  int threads = 0;
+  std::string json_out;
+  std::string cache_file;
+  bool predict_only = false;
+  bool exhaustive = false;
+  bool recalibrate = false;
+  std::uint64_t tolerance = 0;
+  int max_chunk = 65536;
+  std::string orders = "sorted,morton";
+};
+
+int command_tune(const SceneOptions& scene_options, const TuneCommand& command, const std::string& command_line) {
+  if (command.threads < 0) throw cl::InputError("--threads must be >= 0");
+  if (command.max_chunk < 1) throw cl::InputError("--max-chunk must be >= 1");
+  if (!command.json_out.empty()) cl::check_writable(command.json_out);
+  tn::TuneOptions options;
+  options.threads = command.threads > 0 ? command.threads : omp_get_num_procs();
+  options.predict_only = command.predict_only;
+  options.exhaustive = command.exhaustive;
+  options.tolerance = command.tolerance;
+  if (command.tolerance > 0) options.precisions.push_back(cl::Precision::kFloat);
+  options.chunk_grid = tn::log2_chunk_grid(command.max_chunk);
+  options.orders.clear();
+  for (const auto& order : split_list(command.orders)) options.orders.push_back(cl::parse_order(order));
+  auto [scene, scene_record] = scene_options.load();
+  tn::TuningCache cache(command.cache_file.empty() ? tn::TuningCache::default_path() : command.cache_file);
+  const tn::Calibration calibration = machine_calibration(cache, options, options.threads, command.recalibrate);
+  const tn::TuneReport report = tn::tune(scene, scene_record, scene_options.diameter, options, calibration, command_line);
+  for (const auto& method : report.json["methods"]) {
+    std::string measured = "not measured";
+    if (method.contains("measured")) {
+      measured = fmt::format("measured T_c {:.4f} s [{:.4f}, {:.4f}]  regret {:+.1f}%",
+                             method["measured"]["median_s"].get<double>(),
+                             method["measured"]["ci95_low_s"].get<double>(),
+                             method["measured"]["ci95_high_s"].get<double>(), 100.0 * method["regret"].get<double>());
+    }
+    fmt::print("{:<11} {:<40} cost {:7.2f} s  {}\n", method["method"].get<std::string>(),
+               method["variant"].get<std::string>(), method["tuning_cost_s"].get<double>(), measured);
+  }
+  for (const auto& c : report.json["classic"]) {
+    fmt::print("  classic {:<24} k = {:<7} {}\n", c["name"].get<std::string>(), c["chunk"].get<int>(),
+               c.contains("regret") ? fmt::format("regret {:+.1f}%", 100.0 * c["regret"].get<double>()) : "");
+  }
+  for (const auto& p : report.json["predictions"]) {
+    fmt::print("  {} threads: {} ({})\n", p["threads"].get<int>(), p["variant"].get<std::string>(),
+               p["label"].get<std::string>());
+  }
+  if (!command.predict_only) {
+    cache.store_choice(scene_record, scene_options.diameter, options.threads, report.chosen, 0.0);
+  }
+  if (!command.json_out.empty()) {
+    cl::write_file_atomically(command.json_out, [&](std::ostream& out) { out << report.json.dump(2) << '\n'; });
+  }
+  return 0;
 }
 
 int command_variants() {
@@ -351,7 +459,9 @@ int main(int argc, char** argv) {
   DetectCommand detect_command;
   CLI::App* detect = app.add_subcommand("detect", "detect contacts with one variant");
   detect_scene.add_to(*detect, true);
-  detect->add_option("--variant", detect_command.variant, "loop/order[/stencil]/schedule");
+  detect->add_option("--variant", detect_command.variant,
+                     "loop/order[/stencil]/schedule[/float], or auto (the tuner's cached choice)");
+  detect->add_option("--cache", detect_command.cache_file, "tuning cache file for --variant auto");
   detect->add_option("--threads", detect_command.threads, "OpenMP threads (0 = all)");
   detect->add_option("--repeat", detect_command.repeat, "timed repetitions");
   detect->add_option("--warmup", detect_command.warmup, "untimed runs first");
@@ -372,6 +482,27 @@ int main(int argc, char** argv) {
 
   app.add_subcommand("variants", "list every variant and its parameters");
 
+  std::string sweep_config;
+  tn::SweepOptions sweep_options;
+  CLI::App* sweep = app.add_subcommand("sweep", "measure every point of an experiment config");
+  sweep->add_option("config", sweep_config, "experiment config (JSON, docs/experiments.md)")->required();
+  sweep->add_option("--out", sweep_options.out, "result file")->required();
+  sweep->add_flag("--resume", sweep_options.resume, "keep the finished points of --out and run the rest");
+
+  SceneOptions tune_scene;
+  TuneCommand tune_command;
+  CLI::App* tune = app.add_subcommand("tune", "choose the variant and chunk size (docs/tuning.md)");
+  tune_scene.add_to(*tune, true);
+  tune->add_option("--threads", tune_command.threads, "threads to tune for (0 = all cores)");
+  tune->add_option("--json", tune_command.json_out, "tuning report (JSON)");
+  tune->add_option("--cache", tune_command.cache_file, "tuning cache file");
+  tune->add_flag("--predict-only", tune_command.predict_only, "the model alone: no timed run on the scene");
+  tune->add_flag("--exhaustive", tune_command.exhaustive, "also sweep every chunk (ground truth)");
+  tune->add_flag("--recalibrate", tune_command.recalibrate, "fit the machine's cost model again");
+  tune->add_option("--tolerance", tune_command.tolerance, "wrong contact pairs allowed (single precision)");
+  tune->add_option("--max-chunk", tune_command.max_chunk, "largest chunk of the grid 1, 2, 4, ...");
+  tune->add_option("--orders", tune_command.orders, "orders to screen, comma-separated");
+
   SceneOptions demo_scene;
   int demo_repeat = 3;
   CLI::App* demo = app.add_subcommand("demo", "time the paper's variants on a small clustered scene");
@@ -383,6 +514,12 @@ int main(int argc, char** argv) {
     if (*scene) return command_scene(scene_options, scene_out);
     if (*detect) return command_detect(detect_scene, detect_command, command_line);
     if (*demo) return command_demo(demo_scene, demo_repeat);
+    if (*sweep) {
+      sweep_options.progress = true;
+      sweep_options.command_line = command_line;
+      return command_sweep(sweep_config, sweep_options);
+    }
+    if (*tune) return command_tune(tune_scene, tune_command, command_line);
     return command_variants();
   } catch (const CLI::ParseError& e) {
     return app.exit(e);

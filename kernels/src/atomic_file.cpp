@@ -40,10 +40,14 @@ void write_file_atomically(const std::string& path,
   } catch (const std::filesystem::filesystem_error& e) {
     std::filesystem::remove(temporary);
     throw InputError(path + ": " + e.code().message());
-  } catch (...) {
+  } catch (const InputError&) {
     std::error_code ignored;
     std::filesystem::remove(temporary, ignored);
     throw;
+  } catch (const std::exception& e) {
+    std::error_code ignored;
+    std::filesystem::remove(temporary, ignored);
+    throw InputError(path + ": " + e.what());
   }
 }
 

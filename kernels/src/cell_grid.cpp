@@ -14,10 +14,17 @@ CellGrid::CellGrid(const Box& box, double min_width, CellNumbering numbering)
     throw InputError("cell width (diameter D) must be a positive finite number, got " +
                      std::to_string(min_width));
   }
-  const double width = min_width * (1.0 + 0x1.0p-40);
   std::uint64_t cells = 1;
   for (int axis = 0; axis < 3; ++axis) {
     const double extent = box.extent(axis);
+    // Widen the cell a little beyond D so that two particles at distance D (give or take the
+    // rounding of the contact test) can never be found two cells apart: the cell coordinate
+    // floor((x - lo) / w) carries a rounding error of a few ulps of (x - lo) / w and of
+    // |x| / w, so the widening grows with the cell count and the distance from the origin.
+    const double cells_estimate = extent / min_width;
+    const double origin_scale = std::max(std::abs(box.lo[axis]), std::abs(box.hi[axis])) / min_width;
+    const double widening = std::max(0x1.0p-40, 0x1.0p-46 * (cells_estimate + origin_scale));
+    const double width = min_width * (1.0 + widening);
     const double per_axis = std::floor(extent / width);
     if (per_axis > double(kMaxKeys)) {
       throw InputError("cell grid too large: D = " + std::to_string(min_width) +

@@ -300,6 +300,7 @@ void ContactDetector::detect(const CellGrid& grid, const Layout& layout,
     const std::uint32_t* found = out.data();
     for (const std::uint32_t h : homes) {
       const std::uint32_t count = found_count_[h];
+      if (count == 0) continue;
       std::memcpy(partners + contacts_.offsets[h], found, count * sizeof(std::uint32_t));
       if (half) {
         for (std::uint32_t k = 0; k < count; ++k) {
@@ -367,19 +368,21 @@ DetectRun ContactDetector::run(const Scene& scene, const DetectOptions& options)
                                  source.y.data(), source.z.data(),
                                  diameters ? source.diameter.data() : nullptr});
   } else {
-    // Single precision: the conversion is part of the setup, as a code keeping float
-    // coordinates would do it once when they change.
+    // Single precision, relative to the box's lower corner (absolute coordinates far from the
+    // origin would lose most of their float digits). The conversion is part of the setup, as a
+    // code keeping float coordinates would do it once when they change.
     const double convert_start = omp_get_wtime();
     const std::size_t n = source.size();
+    const auto& lo = scene.box.lo;
     narrow_x_.resize(n);
     narrow_y_.resize(n);
     narrow_z_.resize(n);
     narrow_d_.resize(diameters ? n : 0);
 #pragma omp parallel for schedule(static) num_threads(run.threads)
     for (std::size_t i = 0; i < n; ++i) {
-      narrow_x_[i] = static_cast<float>(source.x[i]);
-      narrow_y_[i] = static_cast<float>(source.y[i]);
-      narrow_z_[i] = static_cast<float>(source.z[i]);
+      narrow_x_[i] = static_cast<float>(source.x[i] - lo[0]);
+      narrow_y_[i] = static_cast<float>(source.y[i] - lo[1]);
+      narrow_z_[i] = static_cast<float>(source.z[i] - lo[2]);
       if (diameters) narrow_d_[i] = static_cast<float>(source.diameter[i]);
     }
     run.setup_s += omp_get_wtime() - convert_start;

@@ -261,7 +261,11 @@ void to_json(json& j, const RunRecord& v) {
        {"samples", to_json_value(v.samples)},
        {"aggregates", v.aggregates ? to_json_value(*v.aggregates) : json(nullptr)},
        {"work", v.work ? to_json_value(*v.work) : json(nullptr)},
-       {"counters", v.counters}};
+       {"counters", v.counters},
+       {"contact_check", v.contact_check ? json{{"reference", v.contact_check->reference},
+                                                {"missing_pairs", v.contact_check->missing_pairs},
+                                                {"extra_pairs", v.contact_check->extra_pairs}}
+                                          : json(nullptr)}};
 }
 
 void to_json(json& j, const ResultFile& v) {
@@ -560,6 +564,14 @@ void read(const JsonIn& in, RunWork& out) {
   o.finish();
 }
 
+void read(const JsonIn& in, ContactCheck& out) {
+  ObjectIn o(in);
+  o("reference", out.reference);
+  o("missing_pairs", out.missing_pairs);
+  o("extra_pairs", out.extra_pairs);
+  o.finish();
+}
+
 void read(const JsonIn& in, RunRecord& out) {
   ObjectIn o(in);
   std::string status;
@@ -575,6 +587,7 @@ void read(const JsonIn& in, RunRecord& out) {
   o("aggregates", out.aggregates);
   o("work", out.work);
   o("counters", out.counters);
+  o("contact_check", out.contact_check);
   o.finish();
   if (out.status != RunStatus::kFailed) {
     if (!out.aggregates || !out.work) in.fail("a run with status '" + status + "' needs aggregates and work");

@@ -16,10 +16,13 @@ enum class CellNumbering { kLinear, kMorton };
 
 class CellGrid {
  public:
-  // Cells per axis G = max(1, floor(L / w)) with w = min_width (1 + 2^-40). The small
-  // widening keeps the 27-cell search exact: with w exactly D (D = 1/200 in a unit box),
-  // rounding in floor(x / w) could put two particles at distance D two cells apart.
-  // Throws InputError if min_width <= 0 or the grid would need more than kMaxKeys cells.
+  // Cells per axis G = max(1, floor(L / w)) with w = min_width (1 + e), e = max(2^-40,
+  // 2^-46 (L / D + max|coordinate| / D)). The small widening keeps the 27-cell search exact:
+  // with w exactly D (D = 1/200 in a unit box), rounding in floor(x / w) could put two
+  // particles at distance D two cells apart; the error grows with the cell count and the
+  // distance of the box from the origin, and so does e. Throws InputError if min_width <= 0
+  // or the grid would need more than kMaxKeys keys (Morton keys: 2^(3 b) for 2^b >= the
+  // largest G, so Morton numbering allows at most 512 cells per axis).
   CellGrid(const Box& box, double min_width, CellNumbering numbering);
 
   static constexpr std::uint64_t kMaxKeys = std::uint64_t{1} << 28;

@@ -25,9 +25,10 @@ enum class Stencil { kFull, kHalf };
 
 enum class ScheduleKind { kStatic, kDynamic, kGuided };
 
-// Arithmetic of the pair test: double (exact reference) or float (coordinates rounded to
-// single precision: faster where memory bound, but pairs within a few float ulps of D can be
-// misjudged; the tuner counts those errors and never picks such a variant without a tolerance).
+// Arithmetic of the pair test: double (exact reference) or float (coordinates relative to the
+// box's lower corner, rounded to single precision: half the memory traffic, but pairs whose
+// distance is within a few float ulps of the box extent of D can be misjudged; sweeps count
+// those errors and the tuner never picks such a variant without a tolerance).
 enum class Precision { kDouble, kFloat };
 
 struct Schedule {

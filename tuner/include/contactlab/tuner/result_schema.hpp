@@ -77,6 +77,14 @@ struct RunWork {
   std::array<int, 3> grid{};
 };
 
+// The run's contacts against an exact reference variant: pairs it missed and pairs it found
+// that are not contacts (nonzero only for single precision, or a bug).
+struct ContactCheck {
+  std::string reference;  // the reference variant
+  std::uint64_t missing_pairs = 0;
+  std::uint64_t extra_pairs = 0;
+};
+
 struct RunRecord {
   RunStatus status = RunStatus::kOk;
   std::string message;  // empty when ok
@@ -85,6 +93,7 @@ struct RunRecord {
   std::optional<RunAggregates> aggregates;  // null when failed
   std::optional<RunWork> work;              // null when failed
   std::vector<CounterRecord> counters;      // each with its source; empty when none requested
+  std::optional<ContactCheck> contact_check;  // null when not checked
 };
 
 struct ResultFile {
@@ -122,6 +131,7 @@ void read(const JsonIn& in, RunParameters& out);
 void read(const JsonIn& in, RunSamples& out);
 void read(const JsonIn& in, RunAggregates& out);
 void read(const JsonIn& in, RunWork& out);
+void read(const JsonIn& in, ContactCheck& out);
 void read(const JsonIn& in, RunRecord& out);
 void read(const JsonIn& in, ResultFile& out);
 

@@ -1,0 +1,102 @@
+// The tuner: picks the variant and the chunk size for a scene, a diameter and a thread count,
+// three ways side by side (docs/tuning.md):
+//  - model: zero timed runs on the scene; the exact per-iteration work (cell occupancy) and
+//    a per-machine calibrated cost model predict the best schedule and chunk;
+//  - search: screens the loop/order/stencil variants at the model's schedule, then a
+//    noise-aware search over the chunk size seeded by the model;
+//  - exhaustive: every chunk of the grid (ground truth for the regret of the other two).
+#pragma once
+
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "contactlab/kernels/scene.hpp"
+#include "contactlab/kernels/variant.hpp"
+#include "contactlab/tuner/result_schema.hpp"
+#include "contactlab/tuner/schedule_model.hpp"
+
+namespace contactlab::tuner {
+
+inline constexpr int kTuneSchemaVersion = 1;
+
+struct TuneOptions {
+  int threads = 0;  // 0 = every core
+  std::vector<int> chunk_grid = log2_chunk_grid(65536);
+  std::vector<LoopKind> loops{LoopKind::kParticle, LoopKind::kCell};
+  // Unsorted is left out by default: reordering is faster on every scene measured (paper
+  // Tables 2-5, ours in results/); pass it explicitly to screen it too.
+  std::vector<Order> orders{Order::kSorted, Order::kMorton};
+  std::vector<Stencil> stencils{Stencil::kFull, Stencil::kHalf};
+  // Single precision is screened only with a tolerance (it is never chosen without one).
+  std::vector<Precision> precisions{Precision::kDouble};
+  // Wrong contact pairs a variant may have against the double-precision result and still be
+  // chosen (float variants); 0 = exact only.
+  std::uint64_t tolerance = 0;
+  bool predict_only = false;  // the model alone: no timed run on the scene
+  bool exhaustive = false;    // also sweep the whole chunk grid (ground truth, costly)
+  int search_samples = 3;      // timed runs per chunk evaluated by the search
+  int exhaustive_samples = 6;  // timed runs per chunk of the exhaustive sweep
+  // Extra thread counts for which the model predicts the best chunk (labelled predicted).
+  std::vector<int> predict_threads{4, 8, 16};
+};
+
+// Machine costs of the schedule model for each loop/order/stencil/precision ("structure":
+// a variant without its schedule), fitted once per machine and build, and cached.
+struct StructureCosts {
+  MachineCosts costs;
+  double rms_relative_error = 0.0;
+  int runs = 0;
+};
+
+struct Calibration {
+  std::map<std::string, StructureCosts> structures;  // key: structure_key(variant)
+  std::string source;    // "calibrated now", "cache", "defaults (not calibrated)"
+  double seconds = 0.0;  // spent calibrating
+  int threads = 0;       // the largest thread count used
+};
+
+// "loop/order/stencil[/float]": a variant without its schedule.
+std::string structure_key(const Variant& variant);
+
+// Times a small fixed set of runs of every structure of `options` on this machine (clustered
+// scenes of N = 40,000 and 120,000, D = 1/100; static, static,k, dynamic,k, guided,k at 1 and
+// `threads` threads) and fits each structure's costs.
+Calibration calibrate_machine(const TuneOptions& options, int threads);
+
+struct TuneReport {
+  nlohmann::json json;  // the tune.json document (docs/tuning.md)
+  Variant chosen;       // what `--variant auto` uses: the search's choice (the model's with
+                        // predict_only)
+};
+
+// Throws InputError for bad options. `scene_record` describes the scene for the report.
+TuneReport tune(const Scene& scene, const SceneRecord& scene_record, double diameter,
+                const TuneOptions& options, const Calibration& calibration,
+                const std::string& command_line);
+
+// The tuning cache: a JSON file (default $CONTACTLAB_CACHE_DIR, else $XDG_CACHE_HOME/contactlab,
+// else ~/.cache/contactlab, file tuning.json) holding calibrations per machine and build, and
+// choices per (machine, build, scene checksum, N, D, threads).
+class TuningCache {
+ public:
+  explicit TuningCache(std::string path = default_path());
+  static std::string default_path();
+  const std::string& path() const { return path_; }
+
+  std::optional<Calibration> calibration() const;
+  void store_calibration(const Calibration& calibration);
+  std::optional<Variant> choice(const SceneRecord& scene, double diameter, int threads) const;
+  void store_choice(const SceneRecord& scene, double diameter, int threads, const Variant& variant,
+                    double seconds);
+
+ private:
+  nlohmann::json load() const;
+  void save(const nlohmann::json& document) const;
+  std::string path_;
+};
+
+}  // namespace contactlab::tuner

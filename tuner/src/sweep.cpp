@@ -1,0 +1,159 @@
+#include "contactlab/tuner/sweep.hpp"
+
+#include <fmt/core.h>
+#include <omp.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <map>
+#include <set>
+
+#include "contactlab/kernels/atomic_file.hpp"
+#include "contactlab/kernels/detector.hpp"
+#include "contactlab/kernels/error.hpp"
+#include "contactlab/kernels/scene_io.hpp"
+#include "contactlab/tuner/measure.hpp"
+
+namespace contactlab::tuner {
+namespace {
+
+// The exact reference every point is checked against: double precision, half stencil (the
+// tests prove every double variant equal to the brute force).
+const Variant kReferenceVariant = parse_variant("particle/sorted/half/static");
+
+std::string format_duration(double seconds) {
+  const long s = static_cast<long>(seconds + 0.5);
+  return s >= 3600 ? fmt::format("{}h{:02}m", s / 3600, s / 60 % 60)
+                   : fmt::format("{}m{:02}s", s / 60, s % 60);
+}
+
+}  // namespace
+
+std::string point_key(const std::string& scene_checksum, const std::string& variant, int threads) {
+  return scene_checksum + "|" + variant + "|" + std::to_string(threads);
+}
+
+std::pair<Scene, SceneRecord> load_experiment_scene(const ExperimentScene& scene) {
+  if (!scene.file.empty()) {
+    Scene loaded = read_scene(scene.file, Box{});
+    SceneRecord record = describe_file_scene(scene.file, loaded, scene.diameter);
+    return {std::move(loaded), std::move(record)};
+  }
+  Scene generated = generate_scene(scene.spec);
+  SceneRecord record = describe_generated_scene(scene.spec, generated);
+  return {std::move(generated), std::move(record)};
+}
+
+std::pair<std::uint64_t, std::uint64_t> contact_differences(const ContactList& reference,
+                                                            const ContactList& candidate) {
+  std::uint64_t missing = 0, extra = 0;
+  for (std::size_t i = 0; i < reference.particle_count(); ++i) {
+    const auto a = reference.partners_of(i);
+    const auto b = candidate.partners_of(i);
+    std::size_t p = 0, q = 0;
+    // Rows are sorted; count each pair once, from its lower id.
+    while (p < a.size() || q < b.size()) {
+      if (q == b.size() || (p < a.size() && a[p] < b[q])) {
+        missing += a[p++] > i;
+      } else if (p == a.size() || b[q] < a[p]) {
+        extra += b[q++] > i;
+      } else {
+        ++p;
+        ++q;
+      }
+    }
+  }
+  return {missing, extra};
+}
+
+SweepSummary run_sweep(const Experiment& experiment, const SweepOptions& options) {
+  namespace fs = std::filesystem;
+  check_writable(options.out);
+  ResultFile result;
+  std::set<std::string> done;
+  if (fs::exists(options.out)) {
+    if (!options.resume) {
+      throw InputError(options.out + ": exists; pass --resume to continue that sweep, or choose another file");
+    }
+    result = read_result_file(options.out);
+    for (const RunRecord& run : result.runs) {
+      if (run.status == RunStatus::kFailed) continue;  // failed points are tried again
+      done.insert(point_key(run.parameters.scene.checksum, run.parameters.variant, run.parameters.threads));
+    }
+    std::erase_if(result.runs, [](const RunRecord& r) { return r.status == RunStatus::kFailed; });
+  }
+  const int max_threads = *std::max_element(experiment.threads.begin(), experiment.threads.end());
+  result.context = collect_context(options.command_line, max_threads);
+  for (const std::string& warning : result.context.warnings) fmt::print(stderr, "warning: {}\n", warning);
+
+  const std::vector<ExperimentPoint> points = experiment_points(experiment);
+  SweepSummary summary;
+  summary.points = points.size();
+
+  // Scenes and their reference contacts, made once each.
+  std::vector<std::pair<Scene, SceneRecord>> scenes;
+  for (const ExperimentScene& s : experiment.scenes) scenes.push_back(load_experiment_scene(s));
+  std::map<std::size_t, ContactList> references;
+  ContactDetector detector;
+
+  std::vector<const ExperimentPoint*> todo;
+  for (const ExperimentPoint& point : points) {
+    if (done.count(point_key(scenes[point.scene].second.checksum, to_string(point.variant), point.threads))) {
+      ++summary.skipped;
+    } else {
+      todo.push_back(&point);
+    }
+  }
+  const bool bar = options.progress && ::isatty(STDERR_FILENO);
+  const double start = omp_get_wtime();
+  for (std::size_t index = 0; index < todo.size(); ++index) {
+    const ExperimentPoint& point = *todo[index];
+    const auto& [scene, scene_record] = scenes[point.scene];
+    const double diameter = experiment.scenes[point.scene].diameter;
+    if (bar) {
+      const double elapsed = omp_get_wtime() - start;
+      const double eta = index ? elapsed / double(index) * double(todo.size() - index) : 0.0;
+      fmt::print(stderr, "\r\033[K[{}/{}] {:3.0f}%  elapsed {}  ETA {}  {} threads {}", index + 1,
+                 todo.size(), 100.0 * double(index) / double(todo.size()), format_duration(elapsed),
+                 index ? format_duration(eta) : "?", to_string(point.variant), point.threads);
+    }
+    DetectOptions detect{point.variant, diameter, point.threads, nullptr};
+    RunParameters parameters{to_string(point.variant), point.threads, scene_record, experiment.repetitions};
+    RunRecord run;
+    try {
+      MeasureOptions measure;
+      measure.repetition = experiment.repetitions;
+      if (experiment.check_contacts && !references.count(point.scene)) {
+        detector.run(scene, DetectOptions{kReferenceVariant, diameter, point.threads, nullptr});
+        references[point.scene] = detector.canonical_contacts();
+      }
+      run = measure_detection(detector, scene, scene_record, detect, measure);
+      if (experiment.check_contacts && run.status != RunStatus::kFailed) {
+        const auto [missing, extra] = contact_differences(references[point.scene], detector.canonical_contacts());
+        run.contact_check = ContactCheck{to_string(kReferenceVariant), missing, extra};
+        if ((missing || extra) && point.variant.precision == Precision::kDouble) {
+          run.status = RunStatus::kInvalid;
+          run.message = fmt::format("{} contacts missing and {} extra against {}", missing, extra,
+                                    to_string(kReferenceVariant));
+        }
+      }
+    } catch (const InputError& e) {
+      run = failed_run(parameters, e.what());
+    } catch (const std::bad_alloc&) {
+      run = failed_run(parameters, "out of memory");
+    }
+    switch (run.status) {
+      case RunStatus::kOk: ++summary.ok; break;
+      case RunStatus::kInvalid: ++summary.invalid; break;
+      case RunStatus::kFailed: ++summary.failed; break;
+    }
+    result.runs.push_back(std::move(run));
+    write_result_file(options.out, result);  // after every point: an interruption loses nothing
+  }
+  if (bar) fmt::print(stderr, "\r\033[K");
+  summary.seconds = omp_get_wtime() - start;
+  return summary;
+}
+
+}  // namespace contactlab::tuner

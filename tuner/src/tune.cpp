@@ -1,0 +1,459 @@
+#include "contactlab/tuner/tune.hpp"
+
+#include <fmt/core.h>
+#include <omp.h>
+
+#include <algorithm>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+
+#include "contactlab/kernels/atomic_file.hpp"
+#include "contactlab/kernels/detector.hpp"
+#include "contactlab/kernels/error.hpp"
+#include "contactlab/kernels/scene_generate.hpp"
+#include "contactlab/tuner/chunk_formulas.hpp"
+#include "contactlab/tuner/chunk_search.hpp"
+#include "contactlab/tuner/context.hpp"
+#include "contactlab/tuner/cost_calibration.hpp"
+#include "contactlab/tuner/statistics.hpp"
+#include "contactlab/tuner/sweep.hpp"
+
+namespace contactlab::tuner {
+namespace {
+
+using nlohmann::json;
+
+const Variant kReference = parse_variant("particle/sorted/half/static");
+
+std::vector<Variant> structures_of(const TuneOptions& options) {
+  std::vector<Variant> result;
+  for (const auto loop : options.loops) {
+    for (const auto order : options.orders) {
+      for (const auto stencil : options.stencils) {
+        for (const auto precision : options.precisions) {
+          result.push_back(Variant{loop, order, stencil, Schedule{}, precision});
+        }
+      }
+    }
+  }
+  return result;
+}
+
+Variant with_schedule(Variant v, ScheduleKind kind, int chunk) {
+  v.schedule = Schedule{kind, chunk};
+  return v;
+}
+
+// T_c samples of `count` timed runs (after the detector's buffers are warm).
+std::vector<double> detect_samples(ContactDetector& detector, const Scene& scene,
+                                   const DetectOptions& options, int count) {
+  std::vector<double> samples;
+  for (int i = 0; i < count; ++i) samples.push_back(detector.run(scene, options).detect_s);
+  return samples;
+}
+
+json summary_json(const std::vector<double>& samples) {
+  const Summary s = summarize(samples);
+  return {{"median_s", s.median},
+          {"ci95_low_s", s.interval.low},
+          {"ci95_high_s", s.interval.high},
+          {"samples_s", samples}};
+}
+
+std::string machine_key() {
+  const MachineInfo& m = machine_info();
+  const BuildRecord b = build_record();
+  return fmt::format("{}|{} cpus|{}|{}", m.cpu_model, m.pus, b.flags, b.git_commit);
+}
+
+json costs_json(const MachineCosts& c) {
+  return {{"seconds_per_test", c.seconds_per_test},
+          {"seconds_per_iteration", c.seconds_per_iteration},
+          {"seconds_per_static_chunk", c.seconds_per_static_chunk},
+          {"seconds_per_grab", c.seconds_per_grab},
+          {"seconds_per_stream_break", c.seconds_per_stream_break},
+          {"seconds_per_cold_test", c.seconds_per_cold_test},
+          {"seconds_per_region", c.seconds_per_region}};
+}
+
+MachineCosts costs_from_json(const json& j) {
+  MachineCosts c;
+  c.seconds_per_test = j.at("seconds_per_test").get<double>();
+  c.seconds_per_iteration = j.at("seconds_per_iteration").get<double>();
+  c.seconds_per_static_chunk = j.at("seconds_per_static_chunk").get<double>();
+  c.seconds_per_grab = j.at("seconds_per_grab").get<double>();
+  c.seconds_per_stream_break = j.at("seconds_per_stream_break").get<double>();
+  c.seconds_per_cold_test = j.at("seconds_per_cold_test").get<double>();
+  c.seconds_per_region = j.at("seconds_per_region").get<double>();
+  return c;
+}
+
+// The model's best schedule for one structure: every kind, every chunk of the grid.
+struct ModelChoice {
+  Variant variant;
+  double predicted_s = 0.0;
+  std::vector<CandidatePrediction> candidates;  // of the chosen kind
+};
+
+ModelChoice model_choice(const Variant& structure, std::span<const std::uint32_t> work, int threads,
+                         const MachineCosts& costs, const std::vector<int>& grid) {
+  ModelChoice best;
+  best.predicted_s = std::numeric_limits<double>::infinity();
+  for (const auto kind : {ScheduleKind::kStatic, ScheduleKind::kDynamic, ScheduleKind::kGuided}) {
+    std::vector<int> candidates = grid;
+    if (kind == ScheduleKind::kStatic) candidates.insert(candidates.begin(), 0);  // block
+    const ChunkPrediction p = predict_best_chunk(work, threads, kind, costs, candidates);
+    if (p.best_seconds < best.predicted_s) {
+      best = {with_schedule(structure, kind, p.best_chunk), p.best_seconds, p.candidates};
+    }
+  }
+  return best;
+}
+
+}  // namespace
+
+std::string structure_key(const Variant& variant) {
+  std::string key = std::string(to_string(variant.loop)) + "/" + std::string(to_string(variant.order)) +
+                    "/" + std::string(to_string(variant.stencil));
+  if (variant.precision != Precision::kDouble) key += "/" + std::string(to_string(variant.precision));
+  return key;
+}
+
+Calibration calibrate_machine(const TuneOptions& options, int threads) {
+  const double start = omp_get_wtime();
+  // Two sizes of one clustered scene, so that time per test and fixed costs separate; small
+  // enough to calibrate in seconds (a 99^3 grid keeps the cell loop's simulation cheap), dense
+  // enough that pair tests dominate as on the scenes tuned.
+  std::vector<Scene> scenes;
+  for (const std::uint64_t n : {40'000u, 120'000u}) {
+    SceneSpec spec;
+    spec.kind = SceneKind::kClustered;
+    spec.n = n;
+    spec.diameter = 1.0 / 100.0;
+    scenes.push_back(generate_scene(spec));
+  }
+  const double diameter = 1.0 / 100.0;
+  ContactDetector detector;
+  Calibration calibration;
+  calibration.source = "calibrated now";
+  calibration.threads = threads;
+  const std::vector<Schedule> schedules{
+      {ScheduleKind::kStatic, 0},    {ScheduleKind::kStatic, 1},    {ScheduleKind::kStatic, 64},
+      {ScheduleKind::kStatic, 4096}, {ScheduleKind::kDynamic, 1},   {ScheduleKind::kDynamic, 64},
+      {ScheduleKind::kGuided, 64}};
+  std::vector<int> thread_counts{1};
+  if (threads > 1) thread_counts.push_back(threads);
+  for (const Variant& structure : structures_of(options)) {
+    std::vector<std::vector<std::uint32_t>> works;  // kept alive: TimedRun holds spans
+    for (const Scene& scene : scenes) {
+      works.push_back(detector.iteration_work(scene, DetectOptions{structure, diameter, 1, nullptr}));
+    }
+    std::vector<TimedRun> runs;
+    for (std::size_t s = 0; s < scenes.size(); ++s) {
+      for (const int t : thread_counts) {
+        for (const Schedule& schedule : schedules) {
+          Variant v = structure;
+          v.schedule = schedule;
+          const DetectOptions options_now{v, diameter, t, nullptr};
+          detector.run(scenes[s], options_now);  // warm-up
+          runs.push_back({works[s], t, schedule, median(detect_samples(detector, scenes[s], options_now, 3))});
+        }
+      }
+    }
+    const CalibrationResult fit = calibrate_costs(runs);
+    calibration.structures[structure_key(structure)] = {fit.costs, fit.rms_relative_error,
+                                                        static_cast<int>(runs.size())};
+  }
+  calibration.seconds = omp_get_wtime() - start;
+  return calibration;
+}
+
+TuneReport tune(const Scene& scene, const SceneRecord& scene_record, double diameter,
+                const TuneOptions& options, const Calibration& calibration,
+                const std::string& command_line) {
+  const int threads = options.threads > 0 ? options.threads : omp_get_num_procs();
+  if (options.chunk_grid.empty()) throw InputError("tune: the chunk grid is empty");
+  if (options.search_samples < 1 || options.exhaustive_samples < 1) {
+    throw InputError("tune: samples per chunk must be >= 1");
+  }
+  ContactDetector detector;
+  json report;
+  report["schema_version"] = kTuneSchemaVersion;
+  Context context = collect_context(command_line, threads);
+  report["context"] = context;
+  report["scene"] = scene_record;
+  report["diameter"] = scene.has_diameters() ? json(nullptr) : json(diameter);
+  report["threads"] = threads;
+  report["chunk_grid"] = options.chunk_grid;
+  report["calibration"] = {{"source", calibration.source}, {"seconds", calibration.seconds}};
+
+  // Model: zero timed runs on this scene. Its cost is the work profiles (registration and a
+  // pass over the stencils per structure).
+  const double model_start = omp_get_wtime();
+  struct Structure {
+    Variant variant;
+    std::vector<std::uint32_t> work;
+    MachineCosts costs;
+    ModelChoice model;
+  };
+  std::vector<Structure> structures;
+  json model_table = json::array();
+  for (const Variant& structure : structures_of(options)) {
+    const auto found = calibration.structures.find(structure_key(structure));
+    const MachineCosts costs = found != calibration.structures.end() ? found->second.costs : MachineCosts{};
+    Structure s{structure, detector.iteration_work(scene, DetectOptions{structure, diameter, threads, nullptr}),
+                costs, {}};
+    s.model = model_choice(structure, s.work, threads, costs, options.chunk_grid);
+    model_table.push_back({{"variant", to_string(s.model.variant)}, {"predicted_s", s.model.predicted_s}});
+    structures.push_back(std::move(s));
+  }
+  // Without a tolerance the model cannot vouch for single precision: it never runs.
+  const Structure* model_best = nullptr;
+  for (const Structure& s : structures) {
+    if (s.variant.precision != Precision::kDouble && options.tolerance == 0) continue;
+    if (!model_best || s.model.predicted_s < model_best->model.predicted_s) model_best = &s;
+  }
+  if (!model_best) throw InputError("tune: no structure left to choose from");
+  const double model_cost = omp_get_wtime() - model_start;
+  json methods = json::array();
+  json model_method = {{"method", "model"},
+                       {"variant", to_string(model_best->model.variant)},
+                       {"chunk", model_best->model.variant.schedule.chunk},
+                       {"predicted_s", model_best->model.predicted_s},
+                       {"timed_runs", 0},
+                       {"tuning_cost_s", model_cost},
+                       {"structures", model_table}};
+
+  // Classic formulas and other thread counts, from the model's structure.
+  json classic = json::array();
+  for (const NamedChunk& c : classic_chunks(model_best->work, threads, model_best->costs)) {
+    classic.push_back({{"name", c.name}, {"chunk", c.chunk}, {"inputs", c.inputs}});
+  }
+  json predictions = json::array();
+  for (const int p : options.predict_threads) {
+    const ModelChoice m = model_choice(model_best->variant, model_best->work, p, model_best->costs,
+                                       options.chunk_grid);
+    predictions.push_back({{"threads", p},
+                           {"variant", to_string(m.variant)},
+                           {"predicted_s", m.predicted_s},
+                           {"label", p > omp_get_num_procs() ? "predicted (model only: more threads than this machine has)"
+                                                             : "predicted (model only)"}});
+  }
+  report["classic"] = classic;
+  report["predictions"] = predictions;
+
+  TuneReport result;
+  result.chosen = model_best->model.variant;
+  if (options.predict_only) {
+    methods.push_back(model_method);
+    report["methods"] = methods;
+    result.json = std::move(report);
+    return result;
+  }
+
+  // Search, step 1: screen every structure at its modelled schedule; single precision is
+  // checked against the exact contacts and dropped when wrong beyond the tolerance.
+  const double search_start = omp_get_wtime();
+  detector.run(scene, DetectOptions{kReference, diameter, threads, nullptr});
+  const ContactList reference = detector.canonical_contacts();
+  json screening = json::array();
+  const Structure* screened_best = nullptr;
+  double screened_best_s = std::numeric_limits<double>::infinity();
+  for (const Structure& s : structures) {
+    const DetectOptions o{s.model.variant, diameter, threads, nullptr};
+    detector.run(scene, o);
+    const std::vector<double> samples = detect_samples(detector, scene, o, options.search_samples);
+    const auto [missing, extra] = contact_differences(reference, detector.canonical_contacts());
+    const bool acceptable = missing + extra <= options.tolerance;
+    const double m = median(samples);
+    screening.push_back({{"variant", to_string(s.model.variant)},
+                         {"median_s", m},
+                         {"wrong_contacts", {{"missing", missing}, {"extra", extra}}},
+                         {"acceptable", acceptable}});
+    if (acceptable && m < screened_best_s) {
+      screened_best_s = m;
+      screened_best = &s;
+    }
+  }
+  if (!screened_best) throw InputError("tune: every structure had wrong contacts beyond the tolerance");
+  const double screening_cost = omp_get_wtime() - search_start;
+
+  // Step 2: noise-aware search over k for the best structure and its modelled schedule kind.
+  const ScheduleKind kind = screened_best->model.variant.schedule.kind;
+  auto measure_chunk = [&](int chunk) {
+    const DetectOptions o{with_schedule(screened_best->variant, kind, chunk), diameter, threads, nullptr};
+    return detect_samples(detector, scene, o, options.search_samples);
+  };
+  ChunkSearchOptions search_options;
+  search_options.grid = options.chunk_grid;
+  const int model_chunk = screened_best->model.variant.schedule.chunk;
+  search_options.seed_chunk = model_chunk > 0 ? model_chunk : options.chunk_grid.back();
+  // Budget: a fifth of what the exhaustive sweep would spend, in measured runs.
+  search_options.budget.max_evaluations = std::max(
+      3, static_cast<int>(options.chunk_grid.size() * options.exhaustive_samples / 5 / options.search_samples));
+  const ChunkSearchResult searched = search_chunk(measure_chunk, search_options);
+  const Variant search_variant = with_schedule(screened_best->variant, kind, searched.chosen_chunk);
+  // The search stands on the model (its seed and its schedule kind): its cost includes it.
+  const double search_cost = omp_get_wtime() - search_start + model_cost;
+  result.chosen = search_variant;
+  json search_method = {{"method", "search"},
+                        {"variant", to_string(search_variant)},
+                        {"chunk", searched.chosen_chunk},
+                        {"timed_runs", searched.evaluations * options.search_samples +
+                                           static_cast<int>(structures.size()) * (1 + options.search_samples)},
+                        {"evaluations", searched.evaluations},
+                        {"screening_cost_s", screening_cost},
+                        {"model_cost_s", model_cost},
+                        {"chunk_search_cost_s", search_cost - screening_cost - model_cost},
+                        {"tuning_cost_s", search_cost},
+                        {"screening", screening}};
+  json searched_points = json::array();
+  for (const ChunkMeasurement& m : searched.measured) {
+    searched_points.push_back({{"chunk", m.chunk}, {"median_s", sample_median(m.samples_seconds)}});
+  }
+  search_method["chunks_measured"] = searched_points;
+
+  // Exhaustive: every chunk for the searched structure and kind.
+  std::optional<double> best_s;
+  if (options.exhaustive) {
+    const double exhaustive_start = omp_get_wtime();
+    auto measure_exhaustive = [&](int chunk) {
+      const DetectOptions o{with_schedule(screened_best->variant, kind, chunk), diameter, threads, nullptr};
+      return detect_samples(detector, scene, o, options.exhaustive_samples);
+    };
+    const ChunkSearchResult all = exhaustive_chunk_sweep(measure_exhaustive, search_options);
+    json points = json::array();
+    for (const ChunkMeasurement& m : all.measured) {
+      points.push_back({{"chunk", m.chunk}, {"median_s", sample_median(m.samples_seconds)},
+                        {"ci95_low_s", m.interval.low_seconds}, {"ci95_high_s", m.interval.high_seconds}});
+    }
+    best_s = sample_median(all.at(all.fastest_chunk).samples_seconds);
+    methods.push_back({{"method", "exhaustive"},
+                       {"variant", to_string(with_schedule(screened_best->variant, kind, all.chosen_chunk))},
+                       {"chunk", all.chosen_chunk},
+                       {"fastest_chunk", all.fastest_chunk},
+                       {"timed_runs", all.evaluations * options.exhaustive_samples},
+                       {"tuning_cost_s", omp_get_wtime() - exhaustive_start},
+                       {"chunks_measured", points}});
+  }
+
+  // Verification: each method's choice and each classic chunk measured alike, interleaved
+  // round by round so that drift of the machine spreads over all of them.
+  std::vector<std::pair<std::string, Variant>> contenders{{"model", model_best->model.variant},
+                                                          {"search", search_variant}};
+  for (const NamedChunk& c : classic_chunks(screened_best->work, threads, screened_best->costs)) {
+    contenders.push_back({"classic:" + c.name, with_schedule(screened_best->variant, kind, c.chunk)});
+  }
+  std::vector<std::vector<double>> verify(contenders.size());
+  for (int round = 0; round < options.exhaustive_samples; ++round) {
+    for (std::size_t c = 0; c < contenders.size(); ++c) {
+      const DetectOptions o{contenders[c].second, diameter, threads, nullptr};
+      if (round == 0) detector.run(scene, o);
+      verify[c].push_back(detector.run(scene, o).detect_s);
+    }
+  }
+  double best_verified = std::numeric_limits<double>::infinity();
+  for (const auto& v : verify) best_verified = std::min(best_verified, median(v));
+  const double baseline = best_s ? std::min(*best_s, best_verified) : best_verified;
+  auto attach = [&](json& target, std::size_t index) {
+    target["measured"] = summary_json(verify[index]);
+    target["regret"] = regret(median(verify[index]), baseline);
+    target["regret_against"] = best_s ? "fastest of the exhaustive sweep and the verified choices"
+                                      : "fastest verified choice (no exhaustive sweep)";
+  };
+  attach(model_method, 0);
+  attach(search_method, 1);
+  methods.insert(methods.begin(), search_method);
+  methods.insert(methods.begin(), model_method);
+  for (std::size_t c = 2; c < contenders.size(); ++c) {
+    json& entry = report["classic"][c - 2];
+    entry["variant"] = to_string(contenders[c].second);
+    attach(entry, c);
+  }
+  report["methods"] = methods;
+  result.json = std::move(report);
+  return result;
+}
+
+std::string TuningCache::default_path() {
+  namespace fs = std::filesystem;
+  if (const char* dir = std::getenv("CONTACTLAB_CACHE_DIR"); dir && *dir) return (fs::path(dir) / "tuning.json").string();
+  if (const char* xdg = std::getenv("XDG_CACHE_HOME"); xdg && *xdg) {
+    return (fs::path(xdg) / "contactlab" / "tuning.json").string();
+  }
+  const char* home = std::getenv("HOME");
+  return (fs::path(home && *home ? home : ".") / ".cache" / "contactlab" / "tuning.json").string();
+}
+
+TuningCache::TuningCache(std::string path) : path_(std::move(path)) {}
+
+json TuningCache::load() const {
+  std::ifstream in(path_);
+  if (!in) return json{{"schema_version", 1}, {"calibrations", json::object()}, {"choices", json::object()}};
+  try {
+    json document = json::parse(in);
+    if (document.value("schema_version", 0) != 1 || !document.contains("calibrations") ||
+        !document.contains("choices")) {
+      throw InputError(path_ + ": not a contactlab tuning cache (schema_version 1)");
+    }
+    return document;
+  } catch (const json::exception& e) {
+    throw InputError(path_ + ": tuning cache is not valid JSON (" + std::string(e.what()) +
+                     "); delete it to start a new one");
+  }
+}
+
+void TuningCache::save(const json& document) const {
+  std::filesystem::create_directories(std::filesystem::path(path_).parent_path());
+  write_file_atomically(path_, [&](std::ostream& out) { out << document.dump(2) << '\n'; });
+}
+
+std::optional<Calibration> TuningCache::calibration() const {
+  const json document = load();
+  const auto it = document["calibrations"].find(machine_key());
+  if (it == document["calibrations"].end()) return std::nullopt;
+  Calibration c;
+  c.source = "cache";
+  c.seconds = it->at("seconds").get<double>();
+  c.threads = it->at("threads").get<int>();
+  for (const auto& [key, value] : it->at("structures").items()) {
+    c.structures[key] = {costs_from_json(value.at("costs")), value.at("rms_relative_error").get<double>(),
+                         value.at("runs").get<int>()};
+  }
+  return c;
+}
+
+void TuningCache::store_calibration(const Calibration& calibration) {
+  json document = load();
+  json structures = json::object();
+  for (const auto& [key, s] : calibration.structures) {
+    structures[key] = {{"costs", costs_json(s.costs)}, {"rms_relative_error", s.rms_relative_error}, {"runs", s.runs}};
+  }
+  document["calibrations"][machine_key()] = {
+      {"seconds", calibration.seconds}, {"threads", calibration.threads}, {"structures", structures}};
+  save(document);
+}
+
+namespace {
+std::string choice_key(const SceneRecord& scene, double diameter, int threads) {
+  return fmt::format("{}|{}|{}|{:.17g}|{}", machine_key(), scene.checksum, scene.n, diameter, threads);
+}
+}  // namespace
+
+std::optional<Variant> TuningCache::choice(const SceneRecord& scene, double diameter, int threads) const {
+  const json document = load();
+  const auto it = document["choices"].find(choice_key(scene, diameter, threads));
+  if (it == document["choices"].end()) return std::nullopt;
+  return parse_variant(it->at("variant").get<std::string>());
+}
+
+void TuningCache::store_choice(const SceneRecord& scene, double diameter, int threads, const Variant& variant,
+                               double seconds) {
+  json document = load();
+  document["choices"][choice_key(scene, diameter, threads)] = {{"variant", to_string(variant)},
+                                                               {"detect_s", seconds}};
+  save(document);
+}
+
+}  // namespace contactlab::tuner
