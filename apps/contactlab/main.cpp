@@ -72,7 +72,8 @@ struct SceneOptions {
   void require_diameter() const {
     if (!diameter_given) throw cl::InputError("--diameter is required");
     if (!(diameter > 0.0) || !std::isfinite(diameter)) {
-      throw cl::InputError(fmt::format("--diameter must be a positive finite number, got {}", diameter));
+      throw cl::InputError(
+          fmt::format("--diameter must be a positive finite number, got {}", diameter));
     }
   }
 
@@ -99,12 +100,12 @@ struct SceneOptions {
     if (!input.empty()) {
       args = {"--input", input};
     } else {
-      args = {"--scene",  kind,
-              "--n",      std::to_string(n),
-              "--seed",   std::to_string(seed),
-              "--core",   fmt::format("{}", core),
+      args = {"--scene",      kind,
+              "--n",          std::to_string(n),
+              "--seed",       std::to_string(seed),
+              "--core",       fmt::format("{}", core),
               "--background", fmt::format("{}", background),
-              "--blobs",  std::to_string(blobs),
+              "--blobs",      std::to_string(blobs),
               "--size-ratio", fmt::format("{}", size_ratio)};
     }
     if (diameter_given) args.insert(args.end(), {"--diameter", fmt::format("{}", diameter)});
@@ -151,7 +152,8 @@ std::vector<std::string> split_list(const std::string& text) {
   std::size_t pos = 0;
   while (pos <= text.size()) {
     const auto comma = text.find(',', pos);
-    std::string item = text.substr(pos, comma == std::string::npos ? std::string::npos : comma - pos);
+    std::string item =
+        text.substr(pos, comma == std::string::npos ? std::string::npos : comma - pos);
     if (item.empty()) throw cl::InputError("--papi-events: empty event name in '" + text + "'");
     items.push_back(std::move(item));
     if (comma == std::string::npos) break;
@@ -174,15 +176,19 @@ void print_counters(const tn::CounterRecord& c) {
   for (const auto& e : c.events) {
     std::string threads;
     for (const auto v : e.per_thread) threads += (threads.empty() ? "" : ", ") + std::to_string(v);
-    fmt::print("  {:<28} {:>16}{}\n", e.name, e.total, threads.empty() ? "" : "  per thread [" + threads + "]");
+    fmt::print("  {:<28} {:>16}{}\n", e.name, e.total,
+               threads.empty() ? "" : "  per thread [" + threads + "]");
   }
 }
 
 // Under valgrind, launched by --cache-sim: one detection with callgrind's collection switched on
 // around the detection loop only.
-int command_cache_sim_child(const SceneOptions& scene_options, const cl::Variant& variant, int threads) {
+int command_cache_sim_child(const SceneOptions& scene_options, const cl::Variant& variant,
+                            int threads) {
   if (!tn::running_under_valgrind()) {
-    throw cl::InputError("--cache-sim-child is internal (contactlab runs itself under valgrind with it); use --cache-sim");
+    throw cl::InputError(
+        "--cache-sim-child is internal (contactlab runs itself under valgrind with it); use "
+        "--cache-sim");
   }
   auto [scene, record] = scene_options.load();
   tn::CallgrindRegion region;
@@ -193,12 +199,13 @@ int command_cache_sim_child(const SceneOptions& scene_options, const cl::Variant
   return 0;
 }
 
-tn::Calibration machine_calibration(tn::TuningCache& cache, const tn::TuneOptions& options, int threads,
-                                    bool recalibrate) {
+tn::Calibration machine_calibration(tn::TuningCache& cache, const tn::TuneOptions& options,
+                                    int threads, bool recalibrate) {
   if (!recalibrate) {
     if (auto cached = cache.calibration()) return *cached;
   }
-  fmt::print(stderr, "contactlab: calibrating the cost model on this machine (once; cached in {})...\n",
+  fmt::print(stderr,
+             "contactlab: calibrating the cost model on this machine (once; cached in {})...\n",
              cache.path());
   tn::Calibration calibration = tn::calibrate_machine(options, threads);
   cache.store_calibration(calibration);
@@ -207,20 +214,24 @@ tn::Calibration machine_calibration(tn::TuningCache& cache, const tn::TuneOption
 
 // `--variant auto`: the tuning cache's choice for this machine, build, scene and thread count;
 // on a miss the tuner's search chooses, and the choice is cached.
-cl::Variant auto_variant(const cl::Scene& scene, const tn::SceneRecord& record, double diameter, int threads,
-                         const std::string& cache_file, const std::string& command_line) {
+cl::Variant auto_variant(const cl::Scene& scene, const tn::SceneRecord& record, double diameter,
+                         int threads, const std::string& cache_file,
+                         const std::string& command_line) {
   tn::TuningCache cache(cache_file.empty() ? tn::TuningCache::default_path() : cache_file);
   if (auto cached = cache.choice(record, diameter, threads)) {
-    fmt::print(stderr, "contactlab: --variant auto: {} (from {})\n", cl::to_string(*cached), cache.path());
+    fmt::print(stderr, "contactlab: --variant auto: {} (from {})\n", cl::to_string(*cached),
+               cache.path());
     return *cached;
   }
   tn::TuneOptions options;
   options.threads = threads;
   const tn::Calibration calibration = machine_calibration(cache, options, threads, false);
   fmt::print(stderr, "contactlab: --variant auto: no cached choice, tuning...\n");
-  const tn::TuneReport report = tn::tune(scene, record, diameter, options, calibration, command_line);
+  const tn::TuneReport report =
+      tn::tune(scene, record, diameter, options, calibration, command_line);
   cache.store_choice(record, diameter, threads, report.chosen, 0.0);
-  fmt::print(stderr, "contactlab: --variant auto: {} (stored in {})\n", cl::to_string(report.chosen), cache.path());
+  fmt::print(stderr, "contactlab: --variant auto: {} (stored in {})\n",
+             cl::to_string(report.chosen), cache.path());
   return report.chosen;
 }
 
@@ -231,10 +242,12 @@ int command_detect(const SceneOptions& scene_options, const DetectCommand& comma
   if (command.threads < 0) throw cl::InputError("--threads must be >= 0");
   if (command.adaptive) {
     if (!(command.target_ci > 0.0 && command.target_ci < 1.0)) {
-      throw cl::InputError(fmt::format("--target-ci must be in (0, 1) (a fraction: 0.02 = 2%), got {}", command.target_ci));
+      throw cl::InputError(fmt::format(
+          "--target-ci must be in (0, 1) (a fraction: 0.02 = 2%), got {}", command.target_ci));
     }
     if (!(command.time_budget > 0.0)) throw cl::InputError("--time-budget must be > 0 seconds");
-    if (command.max_repeat < command.repeat) throw cl::InputError("--max-repeat must be >= --repeat");
+    if (command.max_repeat < command.repeat)
+      throw cl::InputError("--max-repeat must be >= --repeat");
   }
   const bool automatic = command.variant == "auto";
   const int threads = command.threads > 0 ? command.threads : omp_get_max_threads();
@@ -251,11 +264,12 @@ int command_detect(const SceneOptions& scene_options, const DetectCommand& comma
   if (!command.json_out.empty()) cl::check_writable(command.json_out);
   std::optional<tn::PapiCounters> papi;
   if (command.papi || !command.papi_events.empty()) {
-    papi.emplace(command.papi_events.empty() ? std::vector<std::string>{} : split_list(command.papi_events));
+    papi.emplace(command.papi_events.empty() ? std::vector<std::string>{}
+                                             : split_list(command.papi_events));
   }
   auto [scene, scene_record] = scene_options.load();
-  const cl::Variant variant = automatic ? auto_variant(scene, scene_record, scene_options.diameter, threads,
-                                                       command.cache_file, command_line)
+  const cl::Variant variant = automatic ? auto_variant(scene, scene_record, scene_options.diameter,
+                                                       threads, command.cache_file, command_line)
                                         : cl::parse_variant(command.variant);
 
   tn::ResultFile result;
@@ -264,8 +278,13 @@ int command_detect(const SceneOptions& scene_options, const DetectCommand& comma
 
   cl::DetectOptions options{variant, scene_options.diameter, threads, nullptr};
   tn::MeasureOptions measure;
-  measure.repetition = {command.warmup, command.repeat, command.adaptive, command.target_ci,
-                        command.time_budget, command.max_repeat, 0.95};
+  measure.repetition = {command.warmup,
+                        command.repeat,
+                        command.adaptive,
+                        command.target_ci,
+                        command.time_budget,
+                        command.max_repeat,
+                        0.95};
   measure.papi = papi ? &*papi : nullptr;
   cl::ContactDetector detector;
   tn::RunRecord run = tn::measure_detection(detector, scene, scene_record, options, measure);
@@ -276,26 +295,30 @@ int command_detect(const SceneOptions& scene_options, const DetectCommand& comma
     request.executable = std::filesystem::read_symlink("/proc/self/exe").string();
     request.arguments = {"detect"};
     for (auto& a : scene_options.arguments()) request.arguments.push_back(std::move(a));
-    request.arguments.insert(request.arguments.end(), {"--variant", cl::to_string(variant), "--threads",
-                                                       std::to_string(threads), "--cache-sim-child"});
+    request.arguments.insert(request.arguments.end(),
+                             {"--variant", cl::to_string(variant), "--threads",
+                              std::to_string(threads), "--cache-sim-child"});
     request.threads = threads;
-    fmt::print(stderr, "contactlab: simulating the {} caches under valgrind (slow)...\n", geometry->name);
+    fmt::print(stderr, "contactlab: simulating the {} caches under valgrind (slow)...\n",
+               geometry->name);
     run.counters.push_back(tn::simulate_caches(request));
   }
 
   const tn::RunAggregates& a = *run.aggregates;
   const tn::RunWork& w = *run.work;
-  fmt::print("variant {}  threads {}  N {}  grid {}x{}x{}  max occupancy {}\n", run.parameters.variant,
-             run.parameters.threads, scene.size(), w.grid[0], w.grid[1], w.grid[2], w.max_cell_occupancy);
+  fmt::print("variant {}  threads {}  N {}  grid {}x{}x{}  max occupancy {}\n",
+             run.parameters.variant, run.parameters.threads, scene.size(), w.grid[0], w.grid[1],
+             w.grid[2], w.max_cell_occupancy);
   auto line = [](const char* name, const tn::Summary& s) {
     const std::string interval =
         s.count < 2 ? std::string("no interval from 1 sample")
                     : fmt::format("[{:.6f}, {:.6f}] covers the median with {:.1f}%", s.interval.low,
                                   s.interval.high, 100.0 * s.interval.coverage);
-    fmt::print("{:<6} median {:.6f} s  {}  min {:.6f}  max {:.6f}\n", name, s.median, interval, s.min, s.max);
+    fmt::print("{:<6} median {:.6f} s  {}  min {:.6f}  max {:.6f}\n", name, s.median, interval,
+               s.min, s.max);
   };
-  fmt::print("{} repetitions after {} warm-up ({}), T_ALL = T_s + T_c:\n", a.repetitions, a.warmup_runs,
-             tn::to_string(a.stop_reason));
+  fmt::print("{} repetitions after {} warm-up ({}), T_ALL = T_s + T_c:\n", a.repetitions,
+             a.warmup_runs, tn::to_string(a.stop_reason));
   line("T_s", a.setup_s);
   line("T_c", a.detect_s);
   line("T_ALL", a.total_s);
@@ -303,11 +326,16 @@ int command_detect(const SceneOptions& scene_options, const DetectCommand& comma
   fmt::print("candidate tests {}  contacts {}\n", w.candidate_tests, w.contact_pairs);
   for (const auto& c : run.counters) {
     print_counters(c);
-    if (!c.available) fmt::print(stderr, "contactlab: warning: no {} counters (reason above and in the result file)\n", c.source);
+    if (!c.available)
+      fmt::print(stderr,
+                 "contactlab: warning: no {} counters (reason above and in the result file)\n",
+                 c.source);
   }
-  if (run.status != tn::RunStatus::kOk) fmt::print(stderr, "contactlab: run {}: {}\n", tn::to_string(run.status), run.message);
+  if (run.status != tn::RunStatus::kOk)
+    fmt::print(stderr, "contactlab: run {}: {}\n", tn::to_string(run.status), run.message);
 
-  if (!command.contacts_out.empty()) cl::write_pairs_csv(detector.canonical_contacts(), command.contacts_out);
+  if (!command.contacts_out.empty())
+    cl::write_pairs_csv(detector.canonical_contacts(), command.contacts_out);
   const bool ok = run.status == tn::RunStatus::kOk;
   result.runs.push_back(std::move(run));
   if (!command.json_out.empty()) tn::write_result_file(command.json_out, result);
@@ -318,8 +346,8 @@ int command_sweep(const std::string& config, const tn::SweepOptions& options) {
   const tn::Experiment experiment = tn::read_experiment(config);
   const tn::SweepSummary summary = tn::run_sweep(experiment, options);
   fmt::print("{}: {} points, {} already done, {} ok, {} invalid, {} failed, {:.1f} s -> {}\n",
-             experiment.name, summary.points, summary.skipped, summary.ok, summary.invalid, summary.failed,
-             summary.seconds, options.out);
+             experiment.name, summary.points, summary.skipped, summary.ok, summary.invalid,
+             summary.failed, summary.seconds, options.out);
   return summary.failed || summary.invalid ? 1 : 0;
 }
 
@@ -335,7 +363,8 @@ struct TuneCommand {
   std::string orders = "sorted,morton";
 };
 
-int command_tune(const SceneOptions& scene_options, const TuneCommand& command, const std::string& command_line) {
+int command_tune(const SceneOptions& scene_options, const TuneCommand& command,
+                 const std::string& command_line) {
   if (command.threads < 0) throw cl::InputError("--threads must be >= 0");
   if (command.max_chunk < 1) throw cl::InputError("--max-chunk must be >= 1");
   if (!command.json_out.empty()) cl::check_writable(command.json_out);
@@ -347,25 +376,33 @@ int command_tune(const SceneOptions& scene_options, const TuneCommand& command, 
   if (command.tolerance > 0) options.precisions.push_back(cl::Precision::kFloat);
   options.chunk_grid = tn::log2_chunk_grid(command.max_chunk);
   options.orders.clear();
-  for (const auto& order : split_list(command.orders)) options.orders.push_back(cl::parse_order(order));
+  for (const auto& order : split_list(command.orders))
+    options.orders.push_back(cl::parse_order(order));
   auto [scene, scene_record] = scene_options.load();
-  tn::TuningCache cache(command.cache_file.empty() ? tn::TuningCache::default_path() : command.cache_file);
-  const tn::Calibration calibration = machine_calibration(cache, options, options.threads, command.recalibrate);
-  const tn::TuneReport report = tn::tune(scene, scene_record, scene_options.diameter, options, calibration, command_line);
+  tn::TuningCache cache(command.cache_file.empty() ? tn::TuningCache::default_path()
+                                                   : command.cache_file);
+  const tn::Calibration calibration =
+      machine_calibration(cache, options, options.threads, command.recalibrate);
+  const tn::TuneReport report =
+      tn::tune(scene, scene_record, scene_options.diameter, options, calibration, command_line);
   for (const auto& method : report.json["methods"]) {
     std::string measured = "not measured";
     if (method.contains("measured")) {
       measured = fmt::format("measured T_c {:.4f} s [{:.4f}, {:.4f}]  regret {:+.1f}%",
                              method["measured"]["median_s"].get<double>(),
                              method["measured"]["ci95_low_s"].get<double>(),
-                             method["measured"]["ci95_high_s"].get<double>(), 100.0 * method["regret"].get<double>());
+                             method["measured"]["ci95_high_s"].get<double>(),
+                             100.0 * method["regret"].get<double>());
     }
     fmt::print("{:<11} {:<40} cost {:7.2f} s  {}\n", method["method"].get<std::string>(),
-               method["variant"].get<std::string>(), method["tuning_cost_s"].get<double>(), measured);
+               method["variant"].get<std::string>(), method["tuning_cost_s"].get<double>(),
+               measured);
   }
   for (const auto& c : report.json["classic"]) {
-    fmt::print("  classic {:<24} k = {:<7} {}\n", c["name"].get<std::string>(), c["chunk"].get<int>(),
-               c.contains("regret") ? fmt::format("regret {:+.1f}%", 100.0 * c["regret"].get<double>()) : "");
+    fmt::print(
+        "  classic {:<24} k = {:<7} {}\n", c["name"].get<std::string>(), c["chunk"].get<int>(),
+        c.contains("regret") ? fmt::format("regret {:+.1f}%", 100.0 * c["regret"].get<double>())
+                             : "");
   }
   for (const auto& p : report.json["predictions"]) {
     fmt::print("  {} threads: {} ({})\n", p["threads"].get<int>(), p["variant"].get<std::string>(),
@@ -375,17 +412,27 @@ int command_tune(const SceneOptions& scene_options, const TuneCommand& command, 
     cache.store_choice(scene_record, scene_options.diameter, options.threads, report.chosen, 0.0);
   }
   if (!command.json_out.empty()) {
-    cl::write_file_atomically(command.json_out, [&](std::ostream& out) { out << report.json.dump(2) << '\n'; });
+    cl::write_file_atomically(command.json_out,
+                              [&](std::ostream& out) { out << report.json.dump(2) << '\n'; });
   }
   return 0;
 }
 
 int command_variants() {
-  fmt::print("Variants are written loop/order/stencil/schedule (loop/order/schedule = full stencil).\n");
-  fmt::print("  loop      cell | particle            parallel over grid cells (paper Fig. 4) or particles (Fig. 5)\n");
-  fmt::print("  order     unsorted | sorted | morton input order, grouped by cell (paper), or by cell in Morton order\n");
-  fmt::print("  stencil   full | half                27 cells, or own + 13 forward cells (each pair tested once)\n");
-  fmt::print("  schedule  static | static,k | dynamic,k | guided,k   (k >= 1; static = block partition)\n\n");
+  fmt::print(
+      "Variants are written loop/order/stencil/schedule (loop/order/schedule = full stencil).\n");
+  fmt::print(
+      "  loop      cell | particle            parallel over grid cells (paper Fig. 4) or particles "
+      "(Fig. 5)\n");
+  fmt::print(
+      "  order     unsorted | sorted | morton input order, grouped by cell (paper), or by cell in "
+      "Morton order\n");
+  fmt::print(
+      "  stencil   full | half                27 cells, or own + 13 forward cells (each pair "
+      "tested once)\n");
+  fmt::print(
+      "  schedule  static | static,k | dynamic,k | guided,k   (k >= 1; static = block "
+      "partition)\n\n");
   fmt::print("The paper's configurations:\n");
   for (const auto& v : cl::paper_variants()) fmt::print("  {}\n", cl::to_string(v));
   fmt::print("\nEvery loop/order/stencil (schedules as above, any k):\n");
@@ -407,8 +454,8 @@ int command_demo(SceneOptions scene_options, int repeat) {
   std::vector<cl::Variant> variants = cl::paper_variants();
   variants.push_back(cl::parse_variant("particle/sorted/half/static,200"));
   variants.push_back(cl::parse_variant("particle/morton/half/static,200"));
-  fmt::print("Clustered scene: N = {}, D = {}, seed {}; {} cores; median of {} runs\n\n", scene.size(),
-             scene_options.diameter, scene_options.seed, cores, repeat);
+  fmt::print("Clustered scene: N = {}, D = {}, seed {}; {} cores; median of {} runs\n\n",
+             scene.size(), scene_options.diameter, scene_options.seed, cores, repeat);
   fmt::print("{:<36} {:>7} {:>10} {:>10} {:>10} {:>8} {:>12}\n", "variant", "threads", "T_s [s]",
              "T_c [s]", "T_ALL [s]", "speedup", "contacts");
   cl::ContactDetector detector;
@@ -422,12 +469,13 @@ int command_demo(SceneOptions scene_options, int repeat) {
       tn::MeasureOptions measure;
       measure.repetition.warmup = 1;
       measure.repetition.repeat = repeat;
-      const tn::RunRecord r = tn::measure_detection(detector, scene, scene_record, options, measure);
+      const tn::RunRecord r =
+          tn::measure_detection(detector, scene, scene_record, options, measure);
       const tn::RunAggregates& a = *r.aggregates;
       if (threads == 1) serial = a.total_s.median;
-      fmt::print("{:<36} {:>7} {:>10.4f} {:>10.4f} {:>10.4f} {:>8.2f} {:>12}\n", cl::to_string(variant),
-                 threads, a.setup_s.median, a.detect_s.median, a.total_s.median, serial / a.total_s.median,
-                 r.work->contact_pairs);
+      fmt::print("{:<36} {:>7} {:>10.4f} {:>10.4f} {:>10.4f} {:>8.2f} {:>12}\n",
+                 cl::to_string(variant), threads, a.setup_s.median, a.detect_s.median,
+                 a.total_s.median, serial / a.total_s.median, r.work->contact_pairs);
       cl::ContactList contacts = detector.canonical_contacts();
       if (!reference) {
         reference = std::move(contacts);
@@ -453,7 +501,8 @@ int main(int argc, char** argv) {
   std::string scene_out;
   CLI::App* scene = app.add_subcommand("scene", "generate a scene and write it to a file");
   scene_options.add_to(*scene, false);
-  scene->add_option("--out", scene_out, "output file: .csv/.txt text, anything else binary")->required();
+  scene->add_option("--out", scene_out, "output file: .csv/.txt text, anything else binary")
+      ->required();
 
   SceneOptions detect_scene;
   DetectCommand detect_command;
@@ -465,17 +514,21 @@ int main(int argc, char** argv) {
   detect->add_option("--threads", detect_command.threads, "OpenMP threads (0 = all)");
   detect->add_option("--repeat", detect_command.repeat, "timed repetitions");
   detect->add_option("--warmup", detect_command.warmup, "untimed runs first");
-  detect->add_flag("--adaptive", detect_command.adaptive,
-                   "repeat until the median's 95% interval is within --target-ci (--repeat = minimum)");
+  detect->add_flag(
+      "--adaptive", detect_command.adaptive,
+      "repeat until the median's 95% interval is within --target-ci (--repeat = minimum)");
   detect->add_option("--target-ci", detect_command.target_ci,
                      "adaptive: target relative half-width of the median's interval (0.02 = 2%)");
-  detect->add_option("--time-budget", detect_command.time_budget, "adaptive: seconds before giving up");
+  detect->add_option("--time-budget", detect_command.time_budget,
+                     "adaptive: seconds before giving up");
   detect->add_option("--max-repeat", detect_command.max_repeat, "adaptive: most timed repetitions");
-  detect->add_flag("--papi", detect_command.papi, "count L1/L2 data-cache misses per thread with PAPI");
+  detect->add_flag("--papi", detect_command.papi,
+                   "count L1/L2 data-cache misses per thread with PAPI");
   detect->add_option("--papi-events", detect_command.papi_events,
                      "count these PAPI events instead (comma-separated, e.g. perf::TASK-CLOCK)");
-  detect->add_option("--cache-sim", detect_command.cache_sim,
-                     "simulate caches under valgrind: host, fx10, or custom:L1SIZE,WAYS,LINE:L2SIZE,WAYS,LINE");
+  detect->add_option(
+      "--cache-sim", detect_command.cache_sim,
+      "simulate caches under valgrind: host, fx10, or custom:L1SIZE,WAYS,LINE:L2SIZE,WAYS,LINE");
   detect->add_flag("--cache-sim-child", detect_command.cache_sim_child)->group("");  // internal
   detect->add_option("--contacts-out", detect_command.contacts_out, "CSV of contacts i,j (i < j)");
   detect->add_option("--json", detect_command.json_out, "result file (docs/result-schema.md)");
@@ -485,9 +538,11 @@ int main(int argc, char** argv) {
   std::string sweep_config;
   tn::SweepOptions sweep_options;
   CLI::App* sweep = app.add_subcommand("sweep", "measure every point of an experiment config");
-  sweep->add_option("config", sweep_config, "experiment config (JSON, docs/experiments.md)")->required();
+  sweep->add_option("config", sweep_config, "experiment config (JSON, docs/experiments.md)")
+      ->required();
   sweep->add_option("--out", sweep_options.out, "result file")->required();
-  sweep->add_flag("--resume", sweep_options.resume, "keep the finished points of --out and run the rest");
+  sweep->add_flag("--resume", sweep_options.resume,
+                  "keep the finished points of --out and run the rest");
 
   SceneOptions tune_scene;
   TuneCommand tune_command;
@@ -496,16 +551,19 @@ int main(int argc, char** argv) {
   tune->add_option("--threads", tune_command.threads, "threads to tune for (0 = all cores)");
   tune->add_option("--json", tune_command.json_out, "tuning report (JSON)");
   tune->add_option("--cache", tune_command.cache_file, "tuning cache file");
-  tune->add_flag("--predict-only", tune_command.predict_only, "the model alone: no timed run on the scene");
+  tune->add_flag("--predict-only", tune_command.predict_only,
+                 "the model alone: no timed run on the scene");
   tune->add_flag("--exhaustive", tune_command.exhaustive, "also sweep every chunk (ground truth)");
   tune->add_flag("--recalibrate", tune_command.recalibrate, "fit the machine's cost model again");
-  tune->add_option("--tolerance", tune_command.tolerance, "wrong contact pairs allowed (single precision)");
+  tune->add_option("--tolerance", tune_command.tolerance,
+                   "wrong contact pairs allowed (single precision)");
   tune->add_option("--max-chunk", tune_command.max_chunk, "largest chunk of the grid 1, 2, 4, ...");
   tune->add_option("--orders", tune_command.orders, "orders to screen, comma-separated");
 
   SceneOptions demo_scene;
   int demo_repeat = 3;
-  CLI::App* demo = app.add_subcommand("demo", "time the paper's variants on a small clustered scene");
+  CLI::App* demo =
+      app.add_subcommand("demo", "time the paper's variants on a small clustered scene");
   demo_scene.add_to(*demo, false);
   demo->add_option("--repeat", demo_repeat, "timed repetitions");
 

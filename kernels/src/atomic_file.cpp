@@ -25,8 +25,8 @@ void check_writable(const std::string& path) {
   if (fs::is_directory(target, ec)) throw InputError(path + ": is a directory");
 }
 
-void write_file_atomically(const std::string& path,
-                           const std::function<void(std::ostream&)>& write, bool binary) {
+void write_file_atomically(const std::string& path, const std::function<void(std::ostream&)>& write,
+                           bool binary) {
   check_writable(path);
   const std::string temporary = path + ".tmp." + std::to_string(::getpid());
   try {

@@ -22,7 +22,8 @@ CellGrid::CellGrid(const Box& box, double min_width, CellNumbering numbering)
     // floor((x - lo) / w) carries a rounding error of a few ulps of (x - lo) / w and of
     // |x| / w, so the widening grows with the cell count and the distance from the origin.
     const double cells_estimate = extent / min_width;
-    const double origin_scale = std::max(std::abs(box.lo[axis]), std::abs(box.hi[axis])) / min_width;
+    const double origin_scale =
+        std::max(std::abs(box.lo[axis]), std::abs(box.hi[axis])) / min_width;
     const double widening = std::max(0x1.0p-40, 0x1.0p-46 * (cells_estimate + origin_scale));
     const double width = min_width * (1.0 + widening);
     const double per_axis = std::floor(extent / width);

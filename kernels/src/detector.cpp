@@ -72,7 +72,8 @@ struct NeighbourRanges {
       const int x_hi = std::min(home[0] + row.dx_hi, dims[0] - 1);
       if (linear) {
         if (r == stencil.own) own = count;
-        const SlotRange range{begin_of[grid.key(x_lo, cy, cz)], begin_of[grid.key(x_hi, cy, cz) + 1]};
+        const SlotRange range{begin_of[grid.key(x_lo, cy, cz)],
+                              begin_of[grid.key(x_hi, cy, cz) + 1]};
         if (range.begin == range.end) continue;  // never the own row: it holds the home
         ranges[count++] = range;
         candidates += range.end - range.begin;
@@ -255,8 +256,9 @@ void ContactDetector::detect(const CellGrid& grid, const Layout& layout,
             const std::uint32_t end = registry_.cell_begin[key + 1];
             if (begin == end) continue;
             const std::uint32_t first = layout.particle_at(begin);
-            nb.build(grid, registry_, stencil,
-                     grid.coords_of(layout.cell_x[first], layout.cell_y[first], layout.cell_z[first]));
+            nb.build(
+                grid, registry_, stencil,
+                grid.coords_of(layout.cell_x[first], layout.cell_y[first], layout.cell_z[first]));
             for (std::uint32_t s = begin; s < end; ++s) {
               visit(half_tag, diameters_tag, layout.particle_at(s), s);
             }
@@ -320,7 +322,8 @@ void ContactDetector::detect(const CellGrid& grid, const Layout& layout,
 
 // Validates the options, builds the grid and registers (and for sorted orders reorders) the
 // particles: the paper's T_s.
-CellGrid ContactDetector::prepare(const Scene& scene, const DetectOptions& options, DetectRun& run) {
+CellGrid ContactDetector::prepare(const Scene& scene, const DetectOptions& options,
+                                  DetectRun& run) {
   const bool diameters = scene.has_diameters();
   if (!diameters && !(options.diameter > 0.0 && options.diameter < 1e300)) {
     throw InputError("diameter D must be a positive finite number (got " +
@@ -402,7 +405,9 @@ std::vector<std::uint32_t> ContactDetector::iteration_work(const Scene& scene,
   const bool half = variant.stencil == Stencil::kHalf;
   // The home particle's cell and slot, whichever the order: registration already knows them.
   const Scene& coordinates = working_is_sorted_ ? sorted_ : scene;
-  auto slot_of = [&](std::uint32_t h) { return working_is_sorted_ ? h : registry_.particle_slot[h]; };
+  auto slot_of = [&](std::uint32_t h) {
+    return working_is_sorted_ ? h : registry_.particle_slot[h];
+  };
   NeighbourRanges nb;
   auto tests_of = [&](std::uint32_t s_h) {
     const SlotRange own = nb.ranges[nb.own];
@@ -423,7 +428,8 @@ std::vector<std::uint32_t> ContactDetector::iteration_work(const Scene& scene,
       const std::uint32_t begin = registry_.cell_begin[key], end = registry_.cell_begin[key + 1];
       if (begin == end) continue;
       const std::uint32_t first = registry_.slot_particle[begin];
-      nb.build(grid, registry_, stencil, grid.coords_of(scene.x[first], scene.y[first], scene.z[first]));
+      nb.build(grid, registry_, stencil,
+               grid.coords_of(scene.x[first], scene.y[first], scene.z[first]));
       for (std::uint32_t s = begin; s < end; ++s) work[key] += tests_of(s);
     }
   }

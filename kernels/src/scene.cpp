@@ -59,7 +59,8 @@ void validate_scene(const Scene& scene, const std::string& source) {
   for (std::size_t i = 0; i < scene.size(); ++i) {
     const double x = scene.x[i], y = scene.y[i], z = scene.z[i];
     if (!std::isfinite(x) || !std::isfinite(y) || !std::isfinite(z)) {
-      throw InputError(source + ": particle " + std::to_string(i) + " has a NaN or infinite coordinate");
+      throw InputError(source + ": particle " + std::to_string(i) +
+                       " has a NaN or infinite coordinate");
     }
     if (!scene.box.contains(x, y, z)) {
       std::ostringstream out;
@@ -90,8 +91,8 @@ void fnv1a(std::uint64_t& hash, const std::vector<double>& values) {
 
 std::uint64_t scene_checksum(const Scene& scene) {
   std::uint64_t hash = 0xcbf29ce484222325ULL;
-  fnv1a(hash, {scene.box.lo[0], scene.box.lo[1], scene.box.lo[2], scene.box.hi[0],
-               scene.box.hi[1], scene.box.hi[2]});
+  fnv1a(hash, {scene.box.lo[0], scene.box.lo[1], scene.box.lo[2], scene.box.hi[0], scene.box.hi[1],
+               scene.box.hi[2]});
   fnv1a(hash, scene.x);
   fnv1a(hash, scene.y);
   fnv1a(hash, scene.z);

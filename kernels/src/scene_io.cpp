@@ -29,7 +29,8 @@ std::vector<std::string> split_fields(const std::string& line) {
   const bool commas = line.find(',') != std::string::npos;
   std::istringstream in(line);
   std::string field;
-  while (commas ? static_cast<bool>(std::getline(in, field, ',')) : static_cast<bool>(in >> field)) {
+  while (commas ? static_cast<bool>(std::getline(in, field, ','))
+                : static_cast<bool>(in >> field)) {
     const std::size_t b = field.find_first_not_of(" \t\r");
     const std::size_t e = field.find_last_not_of(" \t\r");
     fields.push_back(b == std::string::npos ? std::string() : field.substr(b, e - b + 1));
@@ -63,7 +64,8 @@ Scene read_text_scene(const std::string& path, const Box& box) {
     const std::string where = path + ":" + std::to_string(line_number) + ": ";
     std::array<double, 4> v{};
     bool numeric = fields.size() >= 3 && fields.size() <= 4;
-    for (std::size_t k = 0; numeric && k < fields.size(); ++k) numeric = parse_number(fields[k], v[k]);
+    for (std::size_t k = 0; numeric && k < fields.size(); ++k)
+      numeric = parse_number(fields[k], v[k]);
     if (!numeric) {
       bool all_names = !seen_row && columns == 0 && (fields.size() == 3 || fields.size() == 4);
       for (const auto& f : fields) {
@@ -83,7 +85,8 @@ Scene read_text_scene(const std::string& path, const Box& box) {
     }
     seen_row = true;
     for (std::size_t k = 0; k < fields.size(); ++k) {
-      if (!std::isfinite(v[k])) throw InputError(where + "NaN or infinite value '" + fields[k] + "'");
+      if (!std::isfinite(v[k]))
+        throw InputError(where + "NaN or infinite value '" + fields[k] + "'");
     }
     if (!box.contains(v[0], v[1], v[2])) {
       throw InputError(where + "particle (" + fields[0] + ", " + fields[1] + ", " + fields[2] +

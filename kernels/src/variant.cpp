@@ -11,7 +11,8 @@ namespace {
 template <class Enum, std::size_t N>
 using NameTable = std::array<std::pair<Enum, std::string_view>, N>;
 
-constexpr NameTable<LoopKind, 2> kLoops{{{LoopKind::kCell, "cell"}, {LoopKind::kParticle, "particle"}}};
+constexpr NameTable<LoopKind, 2> kLoops{
+    {{LoopKind::kCell, "cell"}, {LoopKind::kParticle, "particle"}}};
 constexpr NameTable<Order, 3> kOrders{
     {{Order::kUnsorted, "unsorted"}, {Order::kSorted, "sorted"}, {Order::kMorton, "morton"}}};
 constexpr NameTable<Stencil, 2> kStencils{{{Stencil::kFull, "full"}, {Stencil::kHalf, "half"}}};
@@ -146,11 +147,15 @@ std::vector<Variant> enumerate(const VariantSpace& space) {
 std::vector<Variant> paper_variants() {
   const Schedule block{ScheduleKind::kStatic, 0};
   return {
-      {LoopKind::kParticle, Order::kUnsorted, Stencil::kFull, block, Precision::kDouble},  // Table 2
-      {LoopKind::kCell, Order::kUnsorted, Stencil::kFull, block, Precision::kDouble},      // Table 3
-      {LoopKind::kParticle, Order::kSorted, Stencil::kFull, block, Precision::kDouble},    // Table 4
-      {LoopKind::kCell, Order::kSorted, Stencil::kFull, block, Precision::kDouble},        // Table 5
-      {LoopKind::kParticle, Order::kSorted, Stencil::kFull, {ScheduleKind::kStatic, 200},
+      {LoopKind::kParticle, Order::kUnsorted, Stencil::kFull, block,
+       Precision::kDouble},                                                              // Table 2
+      {LoopKind::kCell, Order::kUnsorted, Stencil::kFull, block, Precision::kDouble},    // Table 3
+      {LoopKind::kParticle, Order::kSorted, Stencil::kFull, block, Precision::kDouble},  // Table 4
+      {LoopKind::kCell, Order::kSorted, Stencil::kFull, block, Precision::kDouble},      // Table 5
+      {LoopKind::kParticle,
+       Order::kSorted,
+       Stencil::kFull,
+       {ScheduleKind::kStatic, 200},
        Precision::kDouble},  // Table 7
   };
 }

@@ -71,15 +71,15 @@ inline std::vector<Variant> only(std::vector<Variant> variants, Precision precis
 }
 
 // The single-precision reference: the brute force of brute_force.hpp with the same pair test
-// (pair_test.hpp) evaluated in float on coordinates, diameters and D rounded to float, which is
-// what variant.hpp says the float variants compute.
+// (pair_test.hpp) evaluated in float on coordinates relative to the box's lower corner,
+// diameters and D rounded to float, which is what variant.hpp says the float variants compute.
 inline ContactList float_brute_force(const Scene& scene, double diameter) {
   const std::size_t n = scene.size();
   std::vector<float> x(n), y(n), z(n), d(scene.diameter.size());
   for (std::size_t i = 0; i < n; ++i) {
-    x[i] = static_cast<float>(scene.x[i]);
-    y[i] = static_cast<float>(scene.y[i]);
-    z[i] = static_cast<float>(scene.z[i]);
+    x[i] = static_cast<float>(scene.x[i] - scene.box.lo[0]);
+    y[i] = static_cast<float>(scene.y[i] - scene.box.lo[1]);
+    z[i] = static_cast<float>(scene.z[i] - scene.box.lo[2]);
     if (scene.has_diameters()) d[i] = static_cast<float>(scene.diameter[i]);
   }
   const float fd = static_cast<float>(diameter);

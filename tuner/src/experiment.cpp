@@ -97,18 +97,19 @@ ExperimentScene parse_scene(const json& value, const std::string& path, const st
     scene.spec.core = reader.number<double>("core", scene.spec.core, 1e-6, 100.0);
     scene.spec.background = reader.number<double>("background", scene.spec.background, 0.0, 1.0);
     scene.spec.blob_count = reader.number<int>("blobs", scene.spec.blob_count, 1, 1'000'000);
-    scene.spec.blob_radius = reader.number<double>("blob_radius", scene.spec.blob_radius, 1e-6, 0.5);
+    scene.spec.blob_radius =
+        reader.number<double>("blob_radius", scene.spec.blob_radius, 1e-6, 0.5);
     scene.spec.size_ratio = reader.number<double>("size_ratio", scene.spec.size_ratio, 1.0, 1e6);
   }
-  scene.name = reader.text("name", scene.file.empty()
-                                       ? std::string(to_string(scene.spec.kind)) + "-" +
-                                             std::to_string(scene.spec.n)
-                                       : scene.file);
+  scene.name = reader.text("name", scene.file.empty() ? std::string(to_string(scene.spec.kind)) +
+                                                            "-" + std::to_string(scene.spec.n)
+                                                      : scene.file);
   reader.finish();
   return scene;
 }
 
-std::vector<int> parse_chunks(const json& value, const std::string& path, const std::string& source) {
+std::vector<int> parse_chunks(const json& value, const std::string& path,
+                              const std::string& source) {
   if (value.is_array()) {
     std::vector<int> chunks;
     for (std::size_t i = 0; i < value.size(); ++i) {
@@ -196,12 +197,15 @@ Experiment parse_experiment(const json& document, const std::string& source) {
   const json& scenes = reader.require("scenes");
   if (!scenes.is_array() || scenes.empty()) reader.fail("$.scenes", "expected a non-empty array");
   for (std::size_t i = 0; i < scenes.size(); ++i) {
-    experiment.scenes.push_back(parse_scene(scenes[i], "$.scenes[" + std::to_string(i) + "]", source));
+    experiment.scenes.push_back(
+        parse_scene(scenes[i], "$.scenes[" + std::to_string(i) + "]", source));
   }
 
-  if (const json* chunks = reader.find("chunks")) experiment.chunks = parse_chunks(*chunks, "$.chunks", source);
+  if (const json* chunks = reader.find("chunks"))
+    experiment.chunks = parse_chunks(*chunks, "$.chunks", source);
   const json& variants = reader.require("variants");
-  if (!variants.is_array() || variants.empty()) reader.fail("$.variants", "expected a non-empty array");
+  if (!variants.is_array() || variants.empty())
+    reader.fail("$.variants", "expected a non-empty array");
   for (std::size_t i = 0; i < variants.size(); ++i) {
     const std::string path = "$.variants[" + std::to_string(i) + "]";
     if (!variants[i].is_string()) reader.fail(path, "expected a variant string");
@@ -220,11 +224,13 @@ Experiment parse_experiment(const json& document, const std::string& source) {
   }
 
   const json& threads = reader.require("threads");
-  if (!threads.is_array() || threads.empty()) reader.fail("$.threads", "expected a non-empty array");
+  if (!threads.is_array() || threads.empty())
+    reader.fail("$.threads", "expected a non-empty array");
   for (std::size_t i = 0; i < threads.size(); ++i) {
     if (!threads[i].is_number_integer() || threads[i].get<long long>() < 1 ||
         threads[i].get<long long>() > 4096) {
-      reader.fail("$.threads[" + std::to_string(i) + "]", "thread counts must be integers in [1, 4096]");
+      reader.fail("$.threads[" + std::to_string(i) + "]",
+                  "thread counts must be integers in [1, 4096]");
     }
     experiment.threads.push_back(threads[i].get<int>());
   }
@@ -245,7 +251,8 @@ Experiment parse_experiment(const json& document, const std::string& source) {
     ObjectReader m(*measurements, "$.measurements", source);
     experiment.papi = m.flag("papi", false);
     experiment.cache_sim = m.text("cache_sim", "");
-    if (!experiment.cache_sim.empty() && experiment.cache_sim != "host" && experiment.cache_sim != "fx10") {
+    if (!experiment.cache_sim.empty() && experiment.cache_sim != "host" &&
+        experiment.cache_sim != "fx10") {
       m.fail("$.measurements.cache_sim", "expected \"host\" or \"fx10\"");
     }
     experiment.check_contacts = m.flag("check_contacts", true);

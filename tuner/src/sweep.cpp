@@ -74,18 +74,21 @@ SweepSummary run_sweep(const Experiment& experiment, const SweepOptions& options
   std::set<std::string> done;
   if (fs::exists(options.out)) {
     if (!options.resume) {
-      throw InputError(options.out + ": exists; pass --resume to continue that sweep, or choose another file");
+      throw InputError(options.out +
+                       ": exists; pass --resume to continue that sweep, or choose another file");
     }
     result = read_result_file(options.out);
     for (const RunRecord& run : result.runs) {
       if (run.status == RunStatus::kFailed) continue;  // failed points are tried again
-      done.insert(point_key(run.parameters.scene.checksum, run.parameters.variant, run.parameters.threads));
+      done.insert(
+          point_key(run.parameters.scene.checksum, run.parameters.variant, run.parameters.threads));
     }
     std::erase_if(result.runs, [](const RunRecord& r) { return r.status == RunStatus::kFailed; });
   }
   const int max_threads = *std::max_element(experiment.threads.begin(), experiment.threads.end());
   result.context = collect_context(options.command_line, max_threads);
-  for (const std::string& warning : result.context.warnings) fmt::print(stderr, "warning: {}\n", warning);
+  for (const std::string& warning : result.context.warnings)
+    fmt::print(stderr, "warning: {}\n", warning);
 
   const std::vector<ExperimentPoint> points = experiment_points(experiment);
   SweepSummary summary;
@@ -99,7 +102,8 @@ SweepSummary run_sweep(const Experiment& experiment, const SweepOptions& options
 
   std::vector<const ExperimentPoint*> todo;
   for (const ExperimentPoint& point : points) {
-    if (done.count(point_key(scenes[point.scene].second.checksum, to_string(point.variant), point.threads))) {
+    if (done.count(point_key(scenes[point.scene].second.checksum, to_string(point.variant),
+                             point.threads))) {
       ++summary.skipped;
     } else {
       todo.push_back(&point);
@@ -119,7 +123,8 @@ SweepSummary run_sweep(const Experiment& experiment, const SweepOptions& options
                  index ? format_duration(eta) : "?", to_string(point.variant), point.threads);
     }
     DetectOptions detect{point.variant, diameter, point.threads, nullptr};
-    RunParameters parameters{to_string(point.variant), point.threads, scene_record, experiment.repetitions};
+    RunParameters parameters{to_string(point.variant), point.threads, scene_record,
+                             experiment.repetitions};
     RunRecord run;
     try {
       MeasureOptions measure;
@@ -130,7 +135,8 @@ SweepSummary run_sweep(const Experiment& experiment, const SweepOptions& options
       }
       run = measure_detection(detector, scene, scene_record, detect, measure);
       if (experiment.check_contacts && run.status != RunStatus::kFailed) {
-        const auto [missing, extra] = contact_differences(references[point.scene], detector.canonical_contacts());
+        const auto [missing, extra] =
+            contact_differences(references[point.scene], detector.canonical_contacts());
         run.contact_check = ContactCheck{to_string(kReferenceVariant), missing, extra};
         if ((missing || extra) && point.variant.precision == Precision::kDouble) {
           run.status = RunStatus::kInvalid;
@@ -144,9 +150,15 @@ SweepSummary run_sweep(const Experiment& experiment, const SweepOptions& options
       run = failed_run(parameters, "out of memory");
     }
     switch (run.status) {
-      case RunStatus::kOk: ++summary.ok; break;
-      case RunStatus::kInvalid: ++summary.invalid; break;
-      case RunStatus::kFailed: ++summary.failed; break;
+      case RunStatus::kOk:
+        ++summary.ok;
+        break;
+      case RunStatus::kInvalid:
+        ++summary.invalid;
+        break;
+      case RunStatus::kFailed:
+        ++summary.failed;
+        break;
     }
     result.runs.push_back(std::move(run));
     write_result_file(options.out, result);  // after every point: an interruption loses nothing

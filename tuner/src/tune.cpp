@@ -114,9 +114,11 @@ ModelChoice model_choice(const Variant& structure, std::span<const std::uint32_t
 }  // namespace
 
 std::string structure_key(const Variant& variant) {
-  std::string key = std::string(to_string(variant.loop)) + "/" + std::string(to_string(variant.order)) +
-                    "/" + std::string(to_string(variant.stencil));
-  if (variant.precision != Precision::kDouble) key += "/" + std::string(to_string(variant.precision));
+  std::string key = std::string(to_string(variant.loop)) + "/" +
+                    std::string(to_string(variant.order)) + "/" +
+                    std::string(to_string(variant.stencil));
+  if (variant.precision != Precision::kDouble)
+    key += "/" + std::string(to_string(variant.precision));
   return key;
 }
 
@@ -138,16 +140,17 @@ Calibration calibrate_machine(const TuneOptions& options, int threads) {
   Calibration calibration;
   calibration.source = "calibrated now";
   calibration.threads = threads;
-  const std::vector<Schedule> schedules{
-      {ScheduleKind::kStatic, 0},    {ScheduleKind::kStatic, 1},    {ScheduleKind::kStatic, 64},
-      {ScheduleKind::kStatic, 4096}, {ScheduleKind::kDynamic, 1},   {ScheduleKind::kDynamic, 64},
-      {ScheduleKind::kGuided, 64}};
+  const std::vector<Schedule> schedules{{ScheduleKind::kStatic, 0},  {ScheduleKind::kStatic, 1},
+                                        {ScheduleKind::kStatic, 64}, {ScheduleKind::kStatic, 4096},
+                                        {ScheduleKind::kDynamic, 1}, {ScheduleKind::kDynamic, 64},
+                                        {ScheduleKind::kGuided, 64}};
   std::vector<int> thread_counts{1};
   if (threads > 1) thread_counts.push_back(threads);
   for (const Variant& structure : structures_of(options)) {
     std::vector<std::vector<std::uint32_t>> works;  // kept alive: TimedRun holds spans
     for (const Scene& scene : scenes) {
-      works.push_back(detector.iteration_work(scene, DetectOptions{structure, diameter, 1, nullptr}));
+      works.push_back(
+          detector.iteration_work(scene, DetectOptions{structure, diameter, 1, nullptr}));
     }
     std::vector<TimedRun> runs;
     for (std::size_t s = 0; s < scenes.size(); ++s) {
@@ -157,7 +160,8 @@ Calibration calibrate_machine(const TuneOptions& options, int threads) {
           v.schedule = schedule;
           const DetectOptions options_now{v, diameter, t, nullptr};
           detector.run(scenes[s], options_now);  // warm-up
-          runs.push_back({works[s], t, schedule, median(detect_samples(detector, scenes[s], options_now, 3))});
+          runs.push_back(
+              {works[s], t, schedule, median(detect_samples(detector, scenes[s], options_now, 3))});
         }
       }
     }
@@ -201,11 +205,16 @@ TuneReport tune(const Scene& scene, const SceneRecord& scene_record, double diam
   json model_table = json::array();
   for (const Variant& structure : structures_of(options)) {
     const auto found = calibration.structures.find(structure_key(structure));
-    const MachineCosts costs = found != calibration.structures.end() ? found->second.costs : MachineCosts{};
-    Structure s{structure, detector.iteration_work(scene, DetectOptions{structure, diameter, threads, nullptr}),
-                costs, {}};
+    const MachineCosts costs =
+        found != calibration.structures.end() ? found->second.costs : MachineCosts{};
+    Structure s{
+        structure,
+        detector.iteration_work(scene, DetectOptions{structure, diameter, threads, nullptr}),
+        costs,
+        {}};
     s.model = model_choice(structure, s.work, threads, costs, options.chunk_grid);
-    model_table.push_back({{"variant", to_string(s.model.variant)}, {"predicted_s", s.model.predicted_s}});
+    model_table.push_back(
+        {{"variant", to_string(s.model.variant)}, {"predicted_s", s.model.predicted_s}});
     structures.push_back(std::move(s));
   }
   // Without a tolerance the model cannot vouch for single precision: it never runs.
@@ -234,11 +243,13 @@ TuneReport tune(const Scene& scene, const SceneRecord& scene_record, double diam
   for (const int p : options.predict_threads) {
     const ModelChoice m = model_choice(model_best->variant, model_best->work, p, model_best->costs,
                                        options.chunk_grid);
-    predictions.push_back({{"threads", p},
-                           {"variant", to_string(m.variant)},
-                           {"predicted_s", m.predicted_s},
-                           {"label", p > omp_get_num_procs() ? "predicted (model only: more threads than this machine has)"
-                                                             : "predicted (model only)"}});
+    predictions.push_back(
+        {{"threads", p},
+         {"variant", to_string(m.variant)},
+         {"predicted_s", m.predicted_s},
+         {"label", p > omp_get_num_procs()
+                       ? "predicted (model only: more threads than this machine has)"
+                       : "predicted (model only)"}});
   }
   report["classic"] = classic;
   report["predictions"] = predictions;
@@ -276,13 +287,15 @@ TuneReport tune(const Scene& scene, const SceneRecord& scene_record, double diam
       screened_best = &s;
     }
   }
-  if (!screened_best) throw InputError("tune: every structure had wrong contacts beyond the tolerance");
+  if (!screened_best)
+    throw InputError("tune: every structure had wrong contacts beyond the tolerance");
   const double screening_cost = omp_get_wtime() - search_start;
 
   // Step 2: noise-aware search over k for the best structure and its modelled schedule kind.
   const ScheduleKind kind = screened_best->model.variant.schedule.kind;
   auto measure_chunk = [&](int chunk) {
-    const DetectOptions o{with_schedule(screened_best->variant, kind, chunk), diameter, threads, nullptr};
+    const DetectOptions o{with_schedule(screened_best->variant, kind, chunk), diameter, threads,
+                          nullptr};
     return detect_samples(detector, scene, o, options.search_samples);
   };
   ChunkSearchOptions search_options;
@@ -290,24 +303,26 @@ TuneReport tune(const Scene& scene, const SceneRecord& scene_record, double diam
   const int model_chunk = screened_best->model.variant.schedule.chunk;
   search_options.seed_chunk = model_chunk > 0 ? model_chunk : options.chunk_grid.back();
   // Budget: a fifth of what the exhaustive sweep would spend, in measured runs.
-  search_options.budget.max_evaluations = std::max(
-      3, static_cast<int>(options.chunk_grid.size() * options.exhaustive_samples / 5 / options.search_samples));
+  search_options.budget.max_evaluations =
+      std::max(3, static_cast<int>(options.chunk_grid.size() * options.exhaustive_samples / 5 /
+                                   options.search_samples));
   const ChunkSearchResult searched = search_chunk(measure_chunk, search_options);
   const Variant search_variant = with_schedule(screened_best->variant, kind, searched.chosen_chunk);
   // The search stands on the model (its seed and its schedule kind): its cost includes it.
   const double search_cost = omp_get_wtime() - search_start + model_cost;
   result.chosen = search_variant;
-  json search_method = {{"method", "search"},
-                        {"variant", to_string(search_variant)},
-                        {"chunk", searched.chosen_chunk},
-                        {"timed_runs", searched.evaluations * options.search_samples +
-                                           static_cast<int>(structures.size()) * (1 + options.search_samples)},
-                        {"evaluations", searched.evaluations},
-                        {"screening_cost_s", screening_cost},
-                        {"model_cost_s", model_cost},
-                        {"chunk_search_cost_s", search_cost - screening_cost - model_cost},
-                        {"tuning_cost_s", search_cost},
-                        {"screening", screening}};
+  json search_method = {
+      {"method", "search"},
+      {"variant", to_string(search_variant)},
+      {"chunk", searched.chosen_chunk},
+      {"timed_runs", searched.evaluations * options.search_samples +
+                         static_cast<int>(structures.size()) * (1 + options.search_samples)},
+      {"evaluations", searched.evaluations},
+      {"screening_cost_s", screening_cost},
+      {"model_cost_s", model_cost},
+      {"chunk_search_cost_s", search_cost - screening_cost - model_cost},
+      {"tuning_cost_s", search_cost},
+      {"screening", screening}};
   json searched_points = json::array();
   for (const ChunkMeasurement& m : searched.measured) {
     searched_points.push_back({{"chunk", m.chunk}, {"median_s", sample_median(m.samples_seconds)}});
@@ -319,23 +334,27 @@ TuneReport tune(const Scene& scene, const SceneRecord& scene_record, double diam
   if (options.exhaustive) {
     const double exhaustive_start = omp_get_wtime();
     auto measure_exhaustive = [&](int chunk) {
-      const DetectOptions o{with_schedule(screened_best->variant, kind, chunk), diameter, threads, nullptr};
+      const DetectOptions o{with_schedule(screened_best->variant, kind, chunk), diameter, threads,
+                            nullptr};
       return detect_samples(detector, scene, o, options.exhaustive_samples);
     };
     const ChunkSearchResult all = exhaustive_chunk_sweep(measure_exhaustive, search_options);
     json points = json::array();
     for (const ChunkMeasurement& m : all.measured) {
-      points.push_back({{"chunk", m.chunk}, {"median_s", sample_median(m.samples_seconds)},
-                        {"ci95_low_s", m.interval.low_seconds}, {"ci95_high_s", m.interval.high_seconds}});
+      points.push_back({{"chunk", m.chunk},
+                        {"median_s", sample_median(m.samples_seconds)},
+                        {"ci95_low_s", m.interval.low_seconds},
+                        {"ci95_high_s", m.interval.high_seconds}});
     }
     best_s = sample_median(all.at(all.fastest_chunk).samples_seconds);
-    methods.push_back({{"method", "exhaustive"},
-                       {"variant", to_string(with_schedule(screened_best->variant, kind, all.chosen_chunk))},
-                       {"chunk", all.chosen_chunk},
-                       {"fastest_chunk", all.fastest_chunk},
-                       {"timed_runs", all.evaluations * options.exhaustive_samples},
-                       {"tuning_cost_s", omp_get_wtime() - exhaustive_start},
-                       {"chunks_measured", points}});
+    methods.push_back(
+        {{"method", "exhaustive"},
+         {"variant", to_string(with_schedule(screened_best->variant, kind, all.chosen_chunk))},
+         {"chunk", all.chosen_chunk},
+         {"fastest_chunk", all.fastest_chunk},
+         {"timed_runs", all.evaluations * options.exhaustive_samples},
+         {"tuning_cost_s", omp_get_wtime() - exhaustive_start},
+         {"chunks_measured", points}});
   }
 
   // Verification: each method's choice and each classic chunk measured alike, interleaved
@@ -343,7 +362,8 @@ TuneReport tune(const Scene& scene, const SceneRecord& scene_record, double diam
   std::vector<std::pair<std::string, Variant>> contenders{{"model", model_best->model.variant},
                                                           {"search", search_variant}};
   for (const NamedChunk& c : classic_chunks(screened_best->work, threads, screened_best->costs)) {
-    contenders.push_back({"classic:" + c.name, with_schedule(screened_best->variant, kind, c.chunk)});
+    contenders.push_back(
+        {"classic:" + c.name, with_schedule(screened_best->variant, kind, c.chunk)});
   }
   std::vector<std::vector<double>> verify(contenders.size());
   for (int round = 0; round < options.exhaustive_samples; ++round) {
@@ -378,7 +398,8 @@ TuneReport tune(const Scene& scene, const SceneRecord& scene_record, double diam
 
 std::string TuningCache::default_path() {
   namespace fs = std::filesystem;
-  if (const char* dir = std::getenv("CONTACTLAB_CACHE_DIR"); dir && *dir) return (fs::path(dir) / "tuning.json").string();
+  if (const char* dir = std::getenv("CONTACTLAB_CACHE_DIR"); dir && *dir)
+    return (fs::path(dir) / "tuning.json").string();
   if (const char* xdg = std::getenv("XDG_CACHE_HOME"); xdg && *xdg) {
     return (fs::path(xdg) / "contactlab" / "tuning.json").string();
   }
@@ -390,7 +411,9 @@ TuningCache::TuningCache(std::string path) : path_(std::move(path)) {}
 
 json TuningCache::load() const {
   std::ifstream in(path_);
-  if (!in) return json{{"schema_version", 1}, {"calibrations", json::object()}, {"choices", json::object()}};
+  if (!in)
+    return json{
+        {"schema_version", 1}, {"calibrations", json::object()}, {"choices", json::object()}};
   try {
     json document = json::parse(in);
     if (document.value("schema_version", 0) != 1 || !document.contains("calibrations") ||
@@ -418,8 +441,8 @@ std::optional<Calibration> TuningCache::calibration() const {
   c.seconds = it->at("seconds").get<double>();
   c.threads = it->at("threads").get<int>();
   for (const auto& [key, value] : it->at("structures").items()) {
-    c.structures[key] = {costs_from_json(value.at("costs")), value.at("rms_relative_error").get<double>(),
-                         value.at("runs").get<int>()};
+    c.structures[key] = {costs_from_json(value.at("costs")),
+                         value.at("rms_relative_error").get<double>(), value.at("runs").get<int>()};
   }
   return c;
 }
@@ -428,28 +451,33 @@ void TuningCache::store_calibration(const Calibration& calibration) {
   json document = load();
   json structures = json::object();
   for (const auto& [key, s] : calibration.structures) {
-    structures[key] = {{"costs", costs_json(s.costs)}, {"rms_relative_error", s.rms_relative_error}, {"runs", s.runs}};
+    structures[key] = {{"costs", costs_json(s.costs)},
+                       {"rms_relative_error", s.rms_relative_error},
+                       {"runs", s.runs}};
   }
-  document["calibrations"][machine_key()] = {
-      {"seconds", calibration.seconds}, {"threads", calibration.threads}, {"structures", structures}};
+  document["calibrations"][machine_key()] = {{"seconds", calibration.seconds},
+                                             {"threads", calibration.threads},
+                                             {"structures", structures}};
   save(document);
 }
 
 namespace {
 std::string choice_key(const SceneRecord& scene, double diameter, int threads) {
-  return fmt::format("{}|{}|{}|{:.17g}|{}", machine_key(), scene.checksum, scene.n, diameter, threads);
+  return fmt::format("{}|{}|{}|{:.17g}|{}", machine_key(), scene.checksum, scene.n, diameter,
+                     threads);
 }
 }  // namespace
 
-std::optional<Variant> TuningCache::choice(const SceneRecord& scene, double diameter, int threads) const {
+std::optional<Variant> TuningCache::choice(const SceneRecord& scene, double diameter,
+                                           int threads) const {
   const json document = load();
   const auto it = document["choices"].find(choice_key(scene, diameter, threads));
   if (it == document["choices"].end()) return std::nullopt;
   return parse_variant(it->at("variant").get<std::string>());
 }
 
-void TuningCache::store_choice(const SceneRecord& scene, double diameter, int threads, const Variant& variant,
-                               double seconds) {
+void TuningCache::store_choice(const SceneRecord& scene, double diameter, int threads,
+                               const Variant& variant, double seconds) {
   json document = load();
   document["choices"][choice_key(scene, diameter, threads)] = {{"variant", to_string(variant)},
                                                                {"detect_s", seconds}};

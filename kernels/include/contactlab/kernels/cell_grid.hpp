@@ -72,8 +72,9 @@ class CellGrid {
   std::uint64_t key_count_ = 1;
 };
 
-// Particles registered in cells (sorted by cell key, stably): the particles of the cell with key k occupy
-// slots [cell_begin[k], cell_begin[k + 1]), and slot s holds input particle slot_particle[s].
+// Particles registered in cells (sorted by cell key, stably): the particles of the cell with key k
+// occupy slots [cell_begin[k], cell_begin[k + 1]), and slot s holds input particle
+// slot_particle[s].
 struct CellRegistry {
   LargeVector<std::uint32_t> cell_begin;     // key_count + 1 entries
   LargeVector<std::uint32_t> slot_particle;  // slot -> input index

@@ -28,7 +28,8 @@ struct ContactList {
 
 // Renames working ids to input ids (working_to_input empty = identity), moves every row to
 // its input particle and sorts each row ascending: the form compared between variants.
-ContactList canonicalize(const ContactList& working, std::span<const std::uint32_t> working_to_input);
+ContactList canonicalize(const ContactList& working,
+                         std::span<const std::uint32_t> working_to_input);
 
 // CSV `i,j` per contact with i < j, 0-based input rows, ascending; `canonical` must come from
 // canonicalize(). Written atomically.

@@ -33,7 +33,8 @@ class PartnerBuffer {
   void clear() { size_ = 0; }
   // Room for `extra` more entries at the end.
   std::uint32_t* tail(std::size_t extra) {
-    if (size_ + extra > storage_.size()) storage_.resize(std::max(2 * storage_.size(), size_ + extra));
+    if (size_ + extra > storage_.size())
+      storage_.resize(std::max(2 * storage_.size(), size_ + extra));
     return storage_.data() + size_;
   }
   void advance(std::size_t count) { size_ += count; }
@@ -112,7 +113,7 @@ class ContactDetector {
   // Per-thread partner buffers and per-particle bookkeeping, kept between runs.
   std::vector<detail::PartnerBuffer> thread_partners_;
   std::vector<std::vector<std::uint32_t>> thread_homes_;  // particles each thread visited, in order
-  std::vector<std::uint32_t> found_count_;                 // own finds per particle
+  std::vector<std::uint32_t> found_count_;                // own finds per particle
   std::vector<std::uint32_t> reverse_count_;
 };
 

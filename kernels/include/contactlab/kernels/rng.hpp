@@ -35,9 +35,7 @@ class Xoshiro256 {
   // Uniform in [0, 1): the top 53 bits scaled by 2^-53, exact in double.
   constexpr double uniform() { return static_cast<double>(next() >> 11) * 0x1.0p-53; }
   // Uniform in (0, 1): never 0, so it can be inverted through a CDF safely.
-  constexpr double uniform_open() {
-    return (static_cast<double>(next() >> 12) + 0.5) * 0x1.0p-52;
-  }
+  constexpr double uniform_open() { return (static_cast<double>(next() >> 12) + 0.5) * 0x1.0p-52; }
 
  private:
   static constexpr std::uint64_t rotl(std::uint64_t x, int k) { return (x << k) | (x >> (64 - k)); }

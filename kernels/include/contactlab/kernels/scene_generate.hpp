@@ -32,10 +32,10 @@ struct SceneSpec {
   // n(s) ∝ 1 / (s (s + c)^3): it rises as 1/s into the centre and falls as s^-4 outside a
   // core of relative radius c. Smaller c = a sharper, denser core.
   double core = 0.3;
-  double background = 0.0;  // fraction of particles spread uniformly over the box instead
-  int blob_count = 8;       // blobs only
+  double background = 0.0;    // fraction of particles spread uniformly over the box instead
+  int blob_count = 8;         // blobs only
   double blob_radius = 0.15;  // blobs only: R as a fraction of the smallest box extent
-  double size_ratio = 3.0;  // polydisperse only: largest / smallest diameter
+  double size_ratio = 3.0;    // polydisperse only: largest / smallest diameter
 };
 
 // Throws InputError for N too large for 32-bit particle ids, D <= 0 or non-finite, or

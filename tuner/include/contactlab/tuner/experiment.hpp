@@ -4,10 +4,9 @@
 #pragma once
 
 #include <cstdint>
+#include <nlohmann/json_fwd.hpp>
 #include <string>
 #include <vector>
-
-#include <nlohmann/json_fwd.hpp>
 
 #include "contactlab/kernels/scene_generate.hpp"
 #include "contactlab/kernels/variant.hpp"
@@ -37,8 +36,8 @@ struct Experiment {
   // the median's 95% interval; repetition is adaptive when given), "budget_s" (per point)}.
   RepetitionPolicy repetitions;
   bool papi = false;
-  std::string cache_sim;  // "", "host" or "fx10"
-  bool check_contacts = true;  // count wrong contacts against the double-precision reference
+  std::string cache_sim;         // "", "host" or "fx10"
+  bool check_contacts = true;    // count wrong contacts against the double-precision reference
   std::uint64_t order_seed = 1;  // seeds the interleaved order of the points
 
   std::vector<Variant> variants() const;  // the patterns expanded, duplicates removed

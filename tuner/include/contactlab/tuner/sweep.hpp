@@ -16,10 +16,10 @@
 namespace contactlab::tuner {
 
 struct SweepOptions {
-  std::string out;            // result file (schema of docs/result-schema.md)
-  bool resume = false;        // keep the points already in `out` and run the rest
-  bool progress = false;      // progress bar with ETA on stderr
-  std::string command_line;   // recorded in the context
+  std::string out;           // result file (schema of docs/result-schema.md)
+  bool resume = false;       // keep the points already in `out` and run the rest
+  bool progress = false;     // progress bar with ETA on stderr
+  std::string command_line;  // recorded in the context
 };
 
 struct SweepSummary {

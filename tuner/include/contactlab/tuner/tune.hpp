@@ -8,11 +8,10 @@
 #pragma once
 
 #include <map>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 #include "contactlab/kernels/scene.hpp"
 #include "contactlab/kernels/variant.hpp"
@@ -36,8 +35,8 @@ struct TuneOptions {
   // Wrong contact pairs a variant may have against the double-precision result and still be
   // chosen (float variants); 0 = exact only.
   std::uint64_t tolerance = 0;
-  bool predict_only = false;  // the model alone: no timed run on the scene
-  bool exhaustive = false;    // also sweep the whole chunk grid (ground truth, costly)
+  bool predict_only = false;   // the model alone: no timed run on the scene
+  bool exhaustive = false;     // also sweep the whole chunk grid (ground truth, costly)
   int search_samples = 3;      // timed runs per chunk evaluated by the search
   int exhaustive_samples = 6;  // timed runs per chunk of the exhaustive sweep
   // Extra thread counts for which the model predicts the best chunk (labelled predicted).
