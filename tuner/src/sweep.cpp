@@ -7,13 +7,16 @@
 #include <algorithm>
 #include <filesystem>
 #include <map>
+#include <optional>
 #include <set>
 
 #include "contactlab/kernels/atomic_file.hpp"
 #include "contactlab/kernels/detector.hpp"
 #include "contactlab/kernels/error.hpp"
 #include "contactlab/kernels/scene_io.hpp"
+#include "contactlab/tuner/cache_sim.hpp"
 #include "contactlab/tuner/measure.hpp"
+#include "contactlab/tuner/papi_counters.hpp"
 
 namespace contactlab::tuner {
 namespace {
@@ -26,6 +29,26 @@ std::string format_duration(double seconds) {
   const long s = static_cast<long>(seconds + 0.5);
   return s >= 3600 ? fmt::format("{}h{:02}m", s / 3600, s / 60 % 60)
                    : fmt::format("{}m{:02}s", s / 60, s % 60);
+}
+
+// Arguments that make `contactlab detect` rebuild the scene of a point in the child process
+// the cache simulator runs (generated scenes are pure functions of these parameters).
+std::vector<std::string> scene_arguments(const ExperimentScene& scene) {
+  std::vector<std::string> args;
+  if (!scene.file.empty()) {
+    args = {"--input", scene.file};
+  } else {
+    const SceneSpec& s = scene.spec;
+    if (s.blob_radius != SceneSpec{}.blob_radius) {
+      throw InputError("cache simulation: scenes with a non-default blob_radius are not supported");
+    }
+    args = {"--scene",  std::string(to_string(s.kind)),  "--n",          std::to_string(s.n),
+            "--seed",   std::to_string(s.seed),          "--core",       fmt::format("{}", s.core),
+            "--background", fmt::format("{}", s.background), "--blobs", std::to_string(s.blob_count),
+            "--size-ratio", fmt::format("{}", s.size_ratio)};
+  }
+  if (scene.diameter > 0.0) args.insert(args.end(), {"--diameter", fmt::format("{}", scene.diameter)});
+  return args;
 }
 
 }  // namespace
@@ -99,6 +122,10 @@ SweepSummary run_sweep(const Experiment& experiment, const SweepOptions& options
   for (const ExperimentScene& s : experiment.scenes) scenes.push_back(load_experiment_scene(s));
   std::map<std::size_t, ContactList> references;
   ContactDetector detector;
+  std::optional<PapiCounters> papi;
+  if (experiment.papi) papi.emplace(std::vector<std::string>{});
+  std::optional<CacheGeometry> geometry;
+  if (!experiment.cache_sim.empty()) geometry = parse_cache_geometry(experiment.cache_sim);
 
   std::vector<const ExperimentPoint*> todo;
   for (const ExperimentPoint& point : points) {
@@ -129,11 +156,23 @@ SweepSummary run_sweep(const Experiment& experiment, const SweepOptions& options
     try {
       MeasureOptions measure;
       measure.repetition = experiment.repetitions;
+      measure.papi = papi ? &*papi : nullptr;
       if (experiment.check_contacts && !references.count(point.scene)) {
         detector.run(scene, DetectOptions{kReferenceVariant, diameter, point.threads, nullptr});
         references[point.scene] = detector.canonical_contacts();
       }
       run = measure_detection(detector, scene, scene_record, detect, measure);
+      if (geometry) {
+        CacheSimRequest request;
+        request.geometry = *geometry;
+        request.executable = fs::read_symlink("/proc/self/exe").string();
+        request.arguments = {"detect"};
+        for (auto& a : scene_arguments(experiment.scenes[point.scene])) request.arguments.push_back(std::move(a));
+        request.arguments.insert(request.arguments.end(), {"--variant", to_string(point.variant), "--threads",
+                                                           std::to_string(point.threads), "--cache-sim-child"});
+        request.threads = point.threads;
+        run.counters.push_back(simulate_caches(request));
+      }
       if (experiment.check_contacts && run.status != RunStatus::kFailed) {
         const auto [missing, extra] =
             contact_differences(references[point.scene], detector.canonical_contacts());
