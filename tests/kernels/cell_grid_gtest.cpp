@@ -27,7 +27,8 @@ TEST(CellGrid, DimsFollowTheDocumentedFormula) {
   EXPECT_EQ(CellGrid(Box{}, 0.3, CellNumbering::kLinear).dims(), (Dims{3, 3, 3}));
   EXPECT_EQ(CellGrid(Box{}, 1.0 / 256.0, CellNumbering::kLinear).dims(), (Dims{255, 255, 255}));
   // Slightly below 1/200, the widening no longer drops a cell.
-  EXPECT_EQ(CellGrid(Box{}, 1.0 / 200.0 * (1.0 - 1e-9), CellNumbering::kLinear).dims(), (Dims{200, 200, 200}));
+  EXPECT_EQ(CellGrid(Box{}, 1.0 / 200.0 * (1.0 - 1e-9), CellNumbering::kLinear).dims(),
+            (Dims{200, 200, 200}));
   // D >= the box: one cell.
   EXPECT_EQ(CellGrid(Box{}, 1.0, CellNumbering::kLinear).dims(), (Dims{1, 1, 1}));
   EXPECT_EQ(CellGrid(Box{}, 0.9, CellNumbering::kLinear).dims(), (Dims{1, 1, 1}));
@@ -40,7 +41,8 @@ TEST(CellGrid, DimsFollowTheDocumentedFormula) {
     for (const Box& b : {Box{}, box}) {
       const CellGrid grid(b, d, CellNumbering::kLinear);
       for (int axis = 0; axis < 3; ++axis) {
-        EXPECT_EQ(grid.dims()[axis], expected_dim(b.extent(axis), d)) << "D = " << d << " axis " << axis;
+        EXPECT_EQ(grid.dims()[axis], expected_dim(b.extent(axis), d))
+            << "D = " << d << " axis " << axis;
         // Cells are at least D wide (unless one cell spans a box narrower than D), so
         // neighbours within D are at most one cell apart.
         if (grid.dims()[axis] > 1) {
@@ -54,8 +56,9 @@ TEST(CellGrid, DimsFollowTheDocumentedFormula) {
 }
 
 TEST(CellGrid, RejectsBadWidths) {
-  for (const double d : {0.0, -0.0, -1.0, std::numeric_limits<double>::quiet_NaN(),
-                         std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity()}) {
+  for (const double d :
+       {0.0, -0.0, -1.0, std::numeric_limits<double>::quiet_NaN(),
+        std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity()}) {
     EXPECT_THROW(CellGrid(Box{}, d, CellNumbering::kLinear), InputError) << "D = " << d;
     EXPECT_THROW(CellGrid(Box{}, d, CellNumbering::kMorton), InputError) << "D = " << d;
   }
@@ -84,7 +87,9 @@ TEST(CellGrid, UpperFacesLandInTheLastCell) {
       EXPECT_EQ(grid.coords_of(-1.0, 1.0, 5.0)[1], last[1]);
       EXPECT_EQ(grid.coords_of(-1.0, 0.0, 5.5)[2], last[2]);
       // Just inside the upper face: still the last cell.
-      EXPECT_EQ(grid.coords_of(std::nextafter(2.0, 0.0), std::nextafter(1.0, 0.0), std::nextafter(5.5, 0.0)), last);
+      EXPECT_EQ(grid.coords_of(std::nextafter(2.0, 0.0), std::nextafter(1.0, 0.0),
+                               std::nextafter(5.5, 0.0)),
+                last);
     }
   }
 }

@@ -86,7 +86,8 @@ TEST(BruteForceReference, ScenesAreInterestingEnough) {
     const Reference& ref = reference_for(kind);
     EXPECT_TRUE(well_formed(ref.contacts));
     EXPECT_TRUE(well_formed(ref.float_contacts));
-    EXPECT_TRUE(float_errors_near_contact_distance(ref.scene, ref.diameter, ref.float_contacts, ref.contacts));
+    EXPECT_TRUE(float_errors_near_contact_distance(ref.scene, ref.diameter, ref.float_contacts,
+                                                   ref.contacts));
     EXPECT_GE(ref.scene.size(), 1500u);
     EXPECT_LE(ref.scene.size(), 3000u);
     // Plenty of contacts, and cells holding several particles.
@@ -107,7 +108,8 @@ TEST_P(EveryVariantMatchesBruteForce, AllSchedulesAndThreadCounts) {
   const ContactList& expected = precision == Precision::kDouble ? ref.contacts : ref.float_contacts;
   const std::uint64_t expected_candidates =
       stencil == Stencil::kFull ? ref.full_candidates : ref.full_candidates / 2;
-  const CellGrid grid(ref.scene.box, ref.scene.has_diameters() ? ref.scene.max_diameter() : ref.diameter,
+  const CellGrid grid(ref.scene.box,
+                      ref.scene.has_diameters() ? ref.scene.max_diameter() : ref.diameter,
                       CellNumbering::kLinear);
 
   int runs = 0;
@@ -131,7 +133,8 @@ TEST_P(EveryVariantMatchesBruteForce, AllSchedulesAndThreadCounts) {
   }
   EXPECT_EQ(runs, 30);  // 10 schedules x 3 thread counts
   if (precision == Precision::kFloat) {
-    EXPECT_TRUE(float_errors_near_contact_distance(ref.scene, ref.diameter, expected, ref.contacts));
+    EXPECT_TRUE(
+        float_errors_near_contact_distance(ref.scene, ref.diameter, expected, ref.contacts));
   }
 }
 
@@ -161,10 +164,10 @@ TEST(CandidateTests, FullIsTwiceHalfForEveryLoopAndOrder) {
     for (const auto loop : {LoopKind::kCell, LoopKind::kParticle}) {
       for (const auto order : {Order::kUnsorted, Order::kSorted, Order::kMorton}) {
         const Schedule schedule{ScheduleKind::kStatic, 0};
-        const Detected full =
-            detect(ref.scene, Variant{loop, order, Stencil::kFull, schedule, precision}, ref.diameter, 1);
-        const Detected half =
-            detect(ref.scene, Variant{loop, order, Stencil::kHalf, schedule, precision}, ref.diameter, 1);
+        const Detected full = detect(
+            ref.scene, Variant{loop, order, Stencil::kFull, schedule, precision}, ref.diameter, 1);
+        const Detected half = detect(
+            ref.scene, Variant{loop, order, Stencil::kHalf, schedule, precision}, ref.diameter, 1);
         EXPECT_EQ(full.run.candidate_tests, 2 * half.run.candidate_tests)
             << to_string(loop) << "/" << to_string(order) << "/" << to_string(precision);
         EXPECT_EQ(full.run.candidate_tests, ref.full_candidates);
@@ -176,15 +179,16 @@ TEST(CandidateTests, FullIsTwiceHalfForEveryLoopAndOrder) {
 // The brute force itself, on a case small enough to check by hand.
 TEST(BruteForceReference, HandCheckedTriangle) {
   // 0-1 at distance 1 (touching, D = 1), 1-2 at distance 0.5, 0-2 at distance 1.5.
-  const Scene scene = make_scene({{0.0, 0.0, 0.0}, {1.0, 0.0, 0.0}, {1.5, 0.0, 0.0}},
-                                 Box{{0, 0, 0}, {2, 2, 2}});
+  const Scene scene =
+      make_scene({{0.0, 0.0, 0.0}, {1.0, 0.0, 0.0}, {1.5, 0.0, 0.0}}, Box{{0, 0, 0}, {2, 2, 2}});
   const ContactList got = brute_force_contacts(scene, 1.0);
   EXPECT_TRUE(same_contacts(got, list_from_pairs(3, {{0, 1}, {1, 2}})));
   // Per-particle diameters: (d0 + d2) / 2 = 1.5 just reaches particle 2, (d1 + d2) / 2 = 1.25
   // reaches it too, (d0 + d1) / 2 = 0.75 < 1 does not reach; the scalar D is ignored.
   Scene poly = scene;
   poly.diameter = {1.0, 0.5, 2.0};
-  EXPECT_TRUE(same_contacts(brute_force_contacts(poly, 123.0), list_from_pairs(3, {{0, 2}, {1, 2}})));
+  EXPECT_TRUE(
+      same_contacts(brute_force_contacts(poly, 123.0), list_from_pairs(3, {{0, 2}, {1, 2}})));
 }
 
 }  // namespace

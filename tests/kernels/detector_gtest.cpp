@@ -37,8 +37,9 @@ TEST(Detector, RejectsNonPositiveOrNonFiniteDiameter) {
 TEST(Detector, RejectsInvalidSchedules) {
   const Scene scene = uniform_scene(10, 0.1, 1);
   ContactDetector detector;
-  for (const Schedule bad : {Schedule{ScheduleKind::kDynamic, 0}, Schedule{ScheduleKind::kGuided, 0},
-                             Schedule{ScheduleKind::kStatic, -1}, Schedule{ScheduleKind::kDynamic, -5}}) {
+  for (const Schedule bad :
+       {Schedule{ScheduleKind::kDynamic, 0}, Schedule{ScheduleKind::kGuided, 0},
+        Schedule{ScheduleKind::kStatic, -1}, Schedule{ScheduleKind::kDynamic, -5}}) {
     DetectOptions options;
     options.diameter = 0.1;
     options.variant.schedule = bad;
@@ -60,7 +61,8 @@ TEST(Detector, PerParticleDiametersOverrideTheScalarDiameter) {
     const Detected got = detect(scene, Variant{}, d, 2);
     EXPECT_TRUE(same_contacts(got.contacts, expected)) << "D = " << d;
     // The grid is built for the largest diameter.
-    EXPECT_EQ(got.run.grid_dims, CellGrid(scene.box, scene.max_diameter(), CellNumbering::kLinear).dims());
+    EXPECT_EQ(got.run.grid_dims,
+              CellGrid(scene.box, scene.max_diameter(), CellNumbering::kLinear).dims());
   }
 }
 
@@ -105,7 +107,8 @@ TEST(Detector, WorkingIdsMapBackToInputRows) {
       ASSERT_EQ(map.size(), scene.size());
       std::vector<std::uint32_t> sorted(map.begin(), map.end());
       std::sort(sorted.begin(), sorted.end());
-      for (std::size_t i = 0; i < sorted.size(); ++i) ASSERT_EQ(sorted[i], i) << "not a permutation";
+      for (std::size_t i = 0; i < sorted.size(); ++i)
+        ASSERT_EQ(sorted[i], i) << "not a permutation";
     }
     EXPECT_EQ(detector.contacts().particle_count(), scene.size());
     EXPECT_EQ(detector.contacts().pair_count(), expected.pair_count());
@@ -137,8 +140,9 @@ TEST(Detector, IterationWorkIsThePairTestsOfEachIteration) {
       std::uint64_t sum = 0;
       for (const auto w : work) sum += w;
       EXPECT_EQ(sum, run.candidate_tests);
-      const CellGrid grid(scene.box, poly ? scene.max_diameter() : spec.diameter,
-                          v.order == Order::kMorton ? CellNumbering::kMorton : CellNumbering::kLinear);
+      const CellGrid grid(
+          scene.box, poly ? scene.max_diameter() : spec.diameter,
+          v.order == Order::kMorton ? CellNumbering::kMorton : CellNumbering::kLinear);
       if (v.loop == LoopKind::kCell) {
         ASSERT_EQ(work.size(), grid.key_count());
         if (v.stencil == Stencil::kFull) {
@@ -147,7 +151,8 @@ TEST(Detector, IterationWorkIsThePairTestsOfEachIteration) {
             const auto c = grid.coords_of(scene.x[i], scene.y[i], scene.z[i]);
             per_key[grid.key(c[0], c[1], c[2])] += per_particle[i];
           }
-          for (std::size_t k = 0; k < work.size(); ++k) ASSERT_EQ(work[k], per_key[k]) << "key " << k;
+          for (std::size_t k = 0; k < work.size(); ++k)
+            ASSERT_EQ(work[k], per_key[k]) << "key " << k;
         }
       } else {
         ASSERT_EQ(work.size(), scene.size());
@@ -234,8 +239,8 @@ TEST(Detector, ReusedDetectorGivesFreshResults) {
   ContactDetector detector;
   for (std::size_t k = 0; k < steps.size(); ++k) {
     const Step& step = steps[k];
-    SCOPED_TRACE("step " + std::to_string(k) + ": " + to_string(step.variant) + " N=" +
-                 std::to_string(step.scene.size()));
+    SCOPED_TRACE("step " + std::to_string(k) + ": " + to_string(step.variant) +
+                 " N=" + std::to_string(step.scene.size()));
     DetectOptions options;
     options.variant = step.variant;
     options.diameter = step.d;

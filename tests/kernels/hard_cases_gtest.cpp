@@ -22,7 +22,8 @@ using Pairs = std::vector<std::pair<std::uint32_t, std::uint32_t>>;
 // must lie within float rounding of touching); stops reporting after a few failures so that
 // one bug does not bury the output.
 void expect_variants_match(const Scene& scene, double d, const ContactList& expected,
-                           const std::vector<Variant>& variants, std::vector<int> threads = {1, 2, 3}) {
+                           const std::vector<Variant>& variants,
+                           std::vector<int> threads = {1, 2, 3}) {
   ContactList float_expected;
   bool have_float = false;
   int failures = 0;
@@ -67,7 +68,8 @@ Lattice make_lattice(const Box& box, double spacing, const std::vector<int>& ind
       for (const int i : indices) {
         id[{i, j, k}] = static_cast<std::uint32_t>(points.size());
         lattice.index.push_back({i, j, k});
-        points.push_back({box.lo[0] + i * spacing, box.lo[1] + j * spacing, box.lo[2] + k * spacing});
+        points.push_back(
+            {box.lo[0] + i * spacing, box.lo[1] + j * spacing, box.lo[2] + k * spacing});
       }
     }
   }
@@ -130,7 +132,8 @@ TEST(HardCase, LatticeTiesNearOneTwoHundredth) {
   ASSERT_EQ(CellGrid(Box{}, d, CellNumbering::kLinear).dims(), (std::array<int, 3>{199, 199, 199}));
   ASSERT_EQ(CellGrid(Box{}, 1.0 / 200.0, CellNumbering::kLinear).dims(),
             (std::array<int, 3>{199, 199, 199}));
-  const Lattice lattice = make_lattice(Box{}, d, {0, 1, 2, 3, 97, 98, 99, 100, 101, 196, 197, 198, 199});
+  const Lattice lattice =
+      make_lattice(Box{}, d, {0, 1, 2, 3, 97, 98, 99, 100, 101, 196, 197, 198, 199});
   check_lattice(lattice, d, covering_variants(), {2});
 }
 
@@ -181,7 +184,8 @@ TEST(HardCase, LatticeOfRoundedMultiplesMatchesBruteForce) {
     std::vector<Point> points;
     for (const int k : indices) {
       for (const int j : indices) {
-        for (const int i : indices) points.push_back({std::min(1.0, i * d), std::min(1.0, j * d), std::min(1.0, k * d)});
+        for (const int i : indices)
+          points.push_back({std::min(1.0, i * d), std::min(1.0, j * d), std::min(1.0, k * d)});
       }
     }
     const Scene scene = make_scene(points);
@@ -246,19 +250,20 @@ TEST(HardCase, ParticlesOnCellFaces) {
 TEST(HardCase, ParticlesOnTheUpperFacesOfTheBox) {
   const double d = 0.1;  // 9 cells per axis: the last cell is [8/9, 1]
   std::vector<Point> points = {
-      {1.0, 1.0, 1.0},   {1.0, 1.0, 0.95},  {1.0, 0.95, 1.0},  {0.95, 1.0, 1.0},  // corner + 3
-      {1.0, 0.5, 0.5},   {0.92, 0.5, 0.5},  {0.9, 0.5, 0.5},   {0.88, 0.5, 0.5},   // x face
-      {0.5, 1.0, 0.5},   {0.5, 0.9, 0.5},   {0.5, 0.85, 0.5},                      // y face
-      {0.5, 0.5, 1.0},   {0.5, 0.5, 0.9},   {0.5, 0.5, 0.8},                       // z face
-      {1.0, 1.0, 0.3},   {0.93, 0.93, 0.3}, {1.0, 0.9, 0.3},   {0.9, 1.0, 0.3},    // an edge
-      {1.0, 0.0, 0.0},   {0.9, 0.0, 0.0},   {1.0, 0.1, 0.0},   {1.0, 0.0, 1.0},    // lower corners
-      {0.0, 1.0, 1.0},   {0.1, 1.0, 1.0},   {0.0, 0.0, 1.0},   {0.0, 0.1, 1.0},
+      {1.0, 1.0, 1.0}, {1.0, 1.0, 0.95},  {1.0, 0.95, 1.0}, {0.95, 1.0, 1.0},  // corner + 3
+      {1.0, 0.5, 0.5}, {0.92, 0.5, 0.5},  {0.9, 0.5, 0.5},  {0.88, 0.5, 0.5},  // x face
+      {0.5, 1.0, 0.5}, {0.5, 0.9, 0.5},   {0.5, 0.85, 0.5},                    // y face
+      {0.5, 0.5, 1.0}, {0.5, 0.5, 0.9},   {0.5, 0.5, 0.8},                     // z face
+      {1.0, 1.0, 0.3}, {0.93, 0.93, 0.3}, {1.0, 0.9, 0.3},  {0.9, 1.0, 0.3},   // an edge
+      {1.0, 0.0, 0.0}, {0.9, 0.0, 0.0},   {1.0, 0.1, 0.0},  {1.0, 0.0, 1.0},   // lower corners
+      {0.0, 1.0, 1.0}, {0.1, 1.0, 1.0},   {0.0, 0.0, 1.0},  {0.0, 0.1, 1.0},
   };
   const Scene scene = make_scene(points);
   validate_scene(scene, "upper faces");
   const ContactList brute = brute_force_contacts(scene, d);
   // A few contacts that must be there: the corner with its three neighbours, touching pairs.
-  for (const auto& [a, b] : Pairs{{0, 1}, {0, 2}, {0, 3}, {4, 5}, {4, 6}, {8, 9}, {11, 12}, {14, 15}}) {
+  for (const auto& [a, b] :
+       Pairs{{0, 1}, {0, 2}, {0, 3}, {4, 5}, {4, 6}, {8, 9}, {11, 12}, {14, 15}}) {
     const auto row = brute.partners_of(a);
     ASSERT_TRUE(std::binary_search(row.begin(), row.end(), b)) << a << "-" << b;
   }
@@ -309,7 +314,8 @@ TEST(HardCase, AllParticlesInOneCell) {
   Xoshiro256 rng(77);
   std::vector<Point> points;
   for (int k = 0; k < 400; ++k) {
-    points.push_back({0.48 + 0.04 * rng.uniform(), 0.48 + 0.04 * rng.uniform(), 0.48 + 0.04 * rng.uniform()});
+    points.push_back(
+        {0.48 + 0.04 * rng.uniform(), 0.48 + 0.04 * rng.uniform(), 0.48 + 0.04 * rng.uniform()});
   }
   const Scene scene = make_scene(points);
   for (std::size_t i = 0; i < scene.size(); ++i) {
@@ -462,9 +468,10 @@ TEST(HardCase, NearTiesAtOnePlusMinusOneETwelve) {
     // The construction: each pair classifies as intended under eq. (2).
     for (std::uint32_t a = 0; a < ties.scene.size(); a += 2) {
       const bool want = ties.expected.count(a) == 1;
-      EXPECT_EQ(in_contact(ties.scene.x[a] - ties.scene.x[a + 1], ties.scene.y[a] - ties.scene.y[a + 1],
-                           ties.scene.z[a] - ties.scene.z[a + 1], d * d),
-                want);
+      EXPECT_EQ(
+          in_contact(ties.scene.x[a] - ties.scene.x[a + 1], ties.scene.y[a] - ties.scene.y[a + 1],
+                     ties.scene.z[a] - ties.scene.z[a + 1], d * d),
+          want);
     }
     ASSERT_TRUE(same_contacts(brute_force_contacts(ties.scene, d), ties.expected));
     if (d < 0.01) {
@@ -515,7 +522,8 @@ TEST(HardCase, NearTiesAcrossCellFaces) {
   // also meet along a line; the brute force decides those).
   for (std::uint32_t a = 0; a < scene.size(); a += 2) {
     const auto row = brute.partners_of(a);
-    const bool want = std::find(pairs.begin(), pairs.end(), std::make_pair(a, a + 1)) != pairs.end();
+    const bool want =
+        std::find(pairs.begin(), pairs.end(), std::make_pair(a, a + 1)) != pairs.end();
     EXPECT_EQ(std::binary_search(row.begin(), row.end(), a + 1), want) << "pair " << a;
   }
   expect_variants_match(scene, d, brute, every_variant());
@@ -526,9 +534,9 @@ TEST(HardCase, NearTiesAcrossCellFaces) {
 
 TEST(HardCase, NonUnitBoxes) {
   const std::vector<Box> boxes = {
-      Box{{-2.5, 10.0, 1000.0}, {1.5, 12.0, 1003.0}},  // offset, anisotropic
+      Box{{-2.5, 10.0, 1000.0}, {1.5, 12.0, 1003.0}},       // offset, anisotropic
       Box{{1e6, 1e6, -1e6}, {1e6 + 1, 1e6 + 1, -1e6 + 1}},  // far from the origin
-      Box{{0, 0, 0}, {10, 0.5, 0.5}},                   // elongated
+      Box{{0, 0, 0}, {10, 0.5, 0.5}},                       // elongated
   };
   for (const Box& box : boxes) {
     for (const auto kind : all_scene_kinds()) {
@@ -549,8 +557,9 @@ TEST(HardCase, NonUnitBoxes) {
       // Far from the origin float coordinates are too coarse for the float variants (see
       // FloatVariantsInABoxFarFromTheOrigin); the double ones must still be exact there.
       const bool far = std::abs(box.lo[0]) > 1e5;
-      expect_variants_match(scene, spec.diameter, brute,
-                            far ? only(covering_variants(), Precision::kDouble) : covering_variants(), {1, 3});
+      expect_variants_match(
+          scene, spec.diameter, brute,
+          far ? only(covering_variants(), Precision::kDouble) : covering_variants(), {1, 3});
     }
   }
 }
@@ -571,7 +580,8 @@ TEST(HardCase, FloatVariantsInABoxFarFromTheOrigin) {
   const ContactList exact = brute_force_contacts(scene, spec.diameter);
   Scene at_origin = scene;  // the same scene measured from the box corner: what the bound uses
   at_origin.box = Box{};
-  const Detected got = detect(scene, parse_variant("particle/sorted/full/static/float"), spec.diameter, 1);
+  const Detected got =
+      detect(scene, parse_variant("particle/sorted/full/static/float"), spec.diameter, 1);
   EXPECT_TRUE(float_errors_near_contact_distance(at_origin, spec.diameter, got.contacts, exact))
       << "float variant: " << got.contacts.pair_count() << " pairs, exact " << exact.pair_count();
 }
@@ -599,7 +609,8 @@ TEST(HardCase, PolydisperseWithOneLargeParticle) {
 TEST(HardCase, PairTwoCellsApartInALongThinBox) {
   const double d = 0x1.b93d161df7b12p-16;
   const Box box{{-1.0, 0.0, 0.0}, {1.0, d, d}};
-  const Scene scene = make_scene({{0x1.f699dee364791p-1, 0.0, 0.0}, {0x1.f69d515d90b4fp-1, 0.0, 0.0}}, box);
+  const Scene scene =
+      make_scene({{0x1.f699dee364791p-1, 0.0, 0.0}, {0x1.f69d515d90b4fp-1, 0.0, 0.0}}, box);
   validate_scene(scene, "thin box");
   ASSERT_TRUE(in_contact(scene.x[1] - scene.x[0], 0.0, 0.0, d * d));
   const ContactList expected = list_from_pairs(2, {{0, 1}});

@@ -21,7 +21,8 @@ TEST(AtomicFile, WritesTheContent) {
   EXPECT_EQ(read_text(path), "second");
   // Binary mode keeps bytes as they are.
   const std::string bytes("a\0b\r\n\xff", 6);
-  write_file_atomically(dir.file("bin"), [&](std::ostream& out) { out.write(bytes.data(), 6); }, true);
+  write_file_atomically(
+      dir.file("bin"), [&](std::ostream& out) { out.write(bytes.data(), 6); }, true);
   EXPECT_EQ(read_text(dir.file("bin")), bytes);
   EXPECT_EQ(dir.entries(), (std::vector<std::string>{"bin", "out.txt"}));
 }
@@ -65,7 +66,8 @@ TEST(AtomicFile, AnyCallbackErrorBecomesInputErrorNamingTheFile) {
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
   } catch (const std::exception& e) {
-    ADD_FAILURE() << "expected InputError naming " << path << ", got another exception: " << e.what();
+    ADD_FAILURE() << "expected InputError naming " << path
+                  << ", got another exception: " << e.what();
   }
   EXPECT_EQ(read_text(path), "old\n");
   EXPECT_EQ(dir.entries(), std::vector<std::string>{"results.csv"});
@@ -75,10 +77,11 @@ TEST(AtomicFile, StreamFailureIsAnInputError) {
   TempDir dir;
   const std::string path = dir.file("s.txt");
   write_text(path, "old");
-  EXPECT_THROW(write_file_atomically(path, [](std::ostream& out) {
-                 out << "x";
-                 out.setstate(std::ios::badbit);
-               }),
+  EXPECT_THROW(write_file_atomically(path,
+                                     [](std::ostream& out) {
+                                       out << "x";
+                                       out.setstate(std::ios::badbit);
+                                     }),
                InputError);
   EXPECT_EQ(read_text(path), "old");
   EXPECT_EQ(dir.entries(), std::vector<std::string>{"s.txt"});
@@ -105,7 +108,8 @@ TEST(AtomicFile, CheckWritable) {
   // A path that is a directory cannot be written as a file.
   std::filesystem::create_directory(dir.path() / "sub");
   EXPECT_THROW(check_writable(dir.file("sub")), InputError);
-  EXPECT_THROW(write_file_atomically(dir.file("sub"), [](std::ostream& out) { out << "x"; }), InputError);
+  EXPECT_THROW(write_file_atomically(dir.file("sub"), [](std::ostream& out) { out << "x"; }),
+               InputError);
   EXPECT_TRUE(std::filesystem::is_directory(dir.path() / "sub"));
   // Nothing was created by checking.
   EXPECT_EQ(dir.entries(), std::vector<std::string>{"sub"});
@@ -157,12 +161,14 @@ TEST(PairsCsv, MatchesTheDetectedContacts) {
     pairs.emplace_back(static_cast<std::uint32_t>(i), static_cast<std::uint32_t>(j));
   }
   EXPECT_EQ(pairs.size(), got.contacts.pair_count());
-  EXPECT_TRUE(same_contacts(list_from_pairs(scene.size(), pairs), brute_force_contacts(scene, spec.diameter)));
+  EXPECT_TRUE(same_contacts(list_from_pairs(scene.size(), pairs),
+                            brute_force_contacts(scene, spec.diameter)));
 }
 
 TEST(PairsCsv, FailsCleanlyForAMissingDirectory) {
   TempDir dir;
-  EXPECT_THROW(write_pairs_csv(list_from_pairs(2, {{0, 1}}), dir.file("missing/pairs.csv")), InputError);
+  EXPECT_THROW(write_pairs_csv(list_from_pairs(2, {{0, 1}}), dir.file("missing/pairs.csv")),
+               InputError);
 }
 
 }  // namespace

@@ -50,7 +50,8 @@ TEST(Property, PartnerListsAreSymmetricWithoutSelfContacts) {
     const Scene scene = scene_of(kind, 3000, 0.04, 101);
     for (const Variant& v : covering_variants()) {
       for (const int threads : {1, 3}) {
-        SCOPED_TRACE(std::string(to_string(kind)) + " " + to_string(v) + " threads=" + std::to_string(threads));
+        SCOPED_TRACE(std::string(to_string(kind)) + " " + to_string(v) +
+                     " threads=" + std::to_string(threads));
         ContactDetector detector;
         DetectOptions options;
         options.variant = v;
@@ -81,7 +82,8 @@ TEST(Property, InvariantUnderPermutationOfTheInput) {
       const Scene shuffled = permuted(scene, perm);
       ASSERT_NE(scene.x, shuffled.x);
       for (const Variant& v : covering_variants()) {
-        SCOPED_TRACE(std::string(to_string(kind)) + " " + to_string(v) + " permutation " + std::to_string(seed));
+        SCOPED_TRACE(std::string(to_string(kind)) + " " + to_string(v) + " permutation " +
+                     std::to_string(seed));
         const Detected got = detect(shuffled, v, 0.04, 2);
         const ContactList& want = v.precision == Precision::kDouble ? expected : float_expected;
         EXPECT_TRUE(same_contacts(map_back(got.contacts, perm), want));
@@ -98,11 +100,12 @@ TEST(Property, SameResultForEveryThreadCountAndSchedule) {
   const Scene scene = scene_of(SceneKind::kBlobs, 5000, 0.02, 303);
   std::map<Precision, Detected> reference;
   for (const auto precision : {Precision::kDouble, Precision::kFloat}) {
-    reference[precision] =
-        detect(scene, Variant{LoopKind::kCell, Order::kSorted, Stencil::kFull, {}, precision}, 0.02, 1);
+    reference[precision] = detect(
+        scene, Variant{LoopKind::kCell, Order::kSorted, Stencil::kFull, {}, precision}, 0.02, 1);
   }
   ASSERT_GT(reference[Precision::kDouble].contacts.pair_count(), 5000u);
-  ASSERT_TRUE(same_contacts(reference[Precision::kDouble].contacts, brute_force_contacts(scene, 0.02)));
+  ASSERT_TRUE(
+      same_contacts(reference[Precision::kDouble].contacts, brute_force_contacts(scene, 0.02)));
   ASSERT_TRUE(same_contacts(reference[Precision::kFloat].contacts, float_brute_force(scene, 0.02)));
   int failures = 0;
   for (const Variant& v : every_variant()) {
@@ -114,8 +117,9 @@ TEST(Property, SameResultForEveryThreadCountAndSchedule) {
         ADD_FAILURE() << to_string(v) << " threads=" << threads << ": " << same.message();
         if (++failures >= 5) return;
       }
-      EXPECT_EQ(got.run.candidate_tests,
-                v.stencil == Stencil::kFull ? want.run.candidate_tests : want.run.candidate_tests / 2);
+      EXPECT_EQ(got.run.candidate_tests, v.stencil == Stencil::kFull
+                                             ? want.run.candidate_tests
+                                             : want.run.candidate_tests / 2);
     }
   }
 }

@@ -51,14 +51,16 @@ std::string disagreement(const Scene& scene, double d, const Variant& variant, i
   std::ostringstream out;
   const auto same = same_contacts(got.contacts, expected);
   if (!same) out << same.message();
-  if (got.run.contact_pairs != expected.pair_count()) out << " contact_pairs " << got.run.contact_pairs;
+  if (got.run.contact_pairs != expected.pair_count())
+    out << " contact_pairs " << got.run.contact_pairs;
   if (variant.precision == Precision::kFloat) {
     const auto near = float_errors_near_contact_distance(scene, d, got.contacts, exact);
     if (!near) out << near.message();
   }
   const std::uint64_t full = expected_full_candidates(scene, d);
   const std::uint64_t want = variant.stencil == Stencil::kFull ? full : full / 2;
-  if (got.run.candidate_tests != want) out << " candidate_tests " << got.run.candidate_tests << " != " << want;
+  if (got.run.candidate_tests != want)
+    out << " candidate_tests " << got.run.candidate_tests << " != " << want;
   return out.str();
 }
 
@@ -112,9 +114,11 @@ TEST(RapidCheck, TiesOnADyadicGridMatchBruteForce) {
 // Random points in the unit box (not from the generators), every variant on each draw.
 TEST(RapidCheck, EveryVariantAgreesOnRandomPoints) {
   check_with_seed(0x5eed0003, 25, [] {
-    const auto points = *rc::gen::container<std::vector<std::array<double, 3>>>(
-        rc::gen::apply([](int a, int b, int c) { return std::array<double, 3>{a / 1e6, b / 1e6, c / 1e6}; },
-                       rc::gen::inRange(0, 1000001), rc::gen::inRange(0, 1000001), rc::gen::inRange(0, 1000001)));
+    const auto points = *rc::gen::container<std::vector<std::array<double, 3>>>(rc::gen::apply(
+        [](int a, int b, int c) {
+          return std::array<double, 3>{a / 1e6, b / 1e6, c / 1e6};
+        },
+        rc::gen::inRange(0, 1000001), rc::gen::inRange(0, 1000001), rc::gen::inRange(0, 1000001)));
     const Scene scene = make_scene(points);
     const double d = *rc::gen::inRange(1, 40) / 100.0;
     const ContactList expected = brute_force_contacts(scene, d);
@@ -149,7 +153,8 @@ TEST(RapidCheck, PermutationInvariance) {
     const Detected moved = detect(shuffled, variant, spec.diameter, *rc::gen::inRange(1, 4));
     std::vector<std::pair<std::uint32_t, std::uint32_t>> pairs;
     for (std::size_t k = 0; k < moved.contacts.particle_count(); ++k) {
-      for (const std::uint32_t l : moved.contacts.partners_of(k)) pairs.emplace_back(perm[k], perm[l]);
+      for (const std::uint32_t l : moved.contacts.partners_of(k))
+        pairs.emplace_back(perm[k], perm[l]);
     }
     std::vector<std::pair<std::uint32_t, std::uint32_t>> halves;
     for (const auto& [a, b] : pairs) {
@@ -167,15 +172,17 @@ TEST(RapidCheck, VariantStringsRoundTrip) {
     v.loop = *rc::gen::element(LoopKind::kCell, LoopKind::kParticle);
     v.order = *rc::gen::element(Order::kUnsorted, Order::kSorted, Order::kMorton);
     v.stencil = *rc::gen::element(Stencil::kFull, Stencil::kHalf);
-    v.schedule.kind = *rc::gen::element(ScheduleKind::kStatic, ScheduleKind::kDynamic, ScheduleKind::kGuided);
-    v.schedule.chunk = *rc::gen::inRange(v.schedule.kind == ScheduleKind::kStatic ? 0 : 1, 1000000001);
+    v.schedule.kind =
+        *rc::gen::element(ScheduleKind::kStatic, ScheduleKind::kDynamic, ScheduleKind::kGuided);
+    v.schedule.chunk =
+        *rc::gen::inRange(v.schedule.kind == ScheduleKind::kStatic ? 0 : 1, 1000000001);
     v.precision = *rc::gen::element(Precision::kDouble, Precision::kFloat);
     const std::string text = to_string(v);
     RC_ASSERT(parse_variant(text) == v);
     // Three-part form of a full-stencil double variant.
     if (v.stencil == Stencil::kFull && v.precision == Precision::kDouble) {
-      const std::string three = std::string(to_string(v.loop)) + "/" + std::string(to_string(v.order)) +
-                                "/" + to_string(v.schedule);
+      const std::string three = std::string(to_string(v.loop)) + "/" +
+                                std::string(to_string(v.order)) + "/" + to_string(v.schedule);
       RC_ASSERT(parse_variant(three) == v);
     }
   });

@@ -11,7 +11,8 @@
 namespace contactlab::test {
 namespace {
 
-SceneSpec spec_of(SceneKind kind, std::uint64_t n = 1000, double d = 1.0 / 200.0, std::uint64_t seed = 1) {
+SceneSpec spec_of(SceneKind kind, std::uint64_t n = 1000, double d = 1.0 / 200.0,
+                  std::uint64_t seed = 1) {
   SceneSpec spec;
   spec.kind = kind;
   spec.n = n;
@@ -39,10 +40,13 @@ SceneSpec pinned_spec(SceneKind kind) {
 }
 
 TEST(SceneGenerate, ChecksumsArePinned) {
-  EXPECT_EQ(scene_checksum(generate_scene(pinned_spec(SceneKind::kUniform))), 0x2e8f46ab88d1aa6cULL);
-  EXPECT_EQ(scene_checksum(generate_scene(pinned_spec(SceneKind::kClustered))), 0x218cf1b32cd2a81bULL);
+  EXPECT_EQ(scene_checksum(generate_scene(pinned_spec(SceneKind::kUniform))),
+            0x2e8f46ab88d1aa6cULL);
+  EXPECT_EQ(scene_checksum(generate_scene(pinned_spec(SceneKind::kClustered))),
+            0x218cf1b32cd2a81bULL);
   EXPECT_EQ(scene_checksum(generate_scene(pinned_spec(SceneKind::kBlobs))), 0x2d6d955e26903b6aULL);
-  EXPECT_EQ(scene_checksum(generate_scene(pinned_spec(SceneKind::kPolydisperse))), 0xf4282586e6eef37bULL);
+  EXPECT_EQ(scene_checksum(generate_scene(pinned_spec(SceneKind::kPolydisperse))),
+            0xf4282586e6eef37bULL);
 }
 
 TEST(SceneGenerate, SameSpecGivesIdenticalScenes) {
@@ -109,9 +113,11 @@ TEST(SceneGenerate, AllPointsInsideTheBox) {
           const Scene scene = generate_scene(spec);
           ASSERT_EQ(scene.size(), 3000u);
           for (std::size_t i = 0; i < scene.size(); ++i) {
-            ASSERT_TRUE(std::isfinite(scene.x[i]) && std::isfinite(scene.y[i]) && std::isfinite(scene.z[i]));
+            ASSERT_TRUE(std::isfinite(scene.x[i]) && std::isfinite(scene.y[i]) &&
+                        std::isfinite(scene.z[i]));
             ASSERT_TRUE(box.contains(scene.x[i], scene.y[i], scene.z[i]))
-                << "particle " << i << " at " << scene.x[i] << ", " << scene.y[i] << ", " << scene.z[i];
+                << "particle " << i << " at " << scene.x[i] << ", " << scene.y[i] << ", "
+                << scene.z[i];
           }
           EXPECT_NO_THROW(validate_scene(scene, "generated"));
           EXPECT_EQ(scene.box.lo, box.lo);
@@ -185,8 +191,12 @@ TEST(SceneGenerate, InvalidSpecsThrow) {
       bad([](SceneSpec& s) { s.blob_radius = 0.51; }),
       bad([](SceneSpec& s) { s.size_ratio = 0.99; }),
       bad([=](SceneSpec& s) { s.size_ratio = inf; }),
-      bad([](SceneSpec& s) { s.box = Box{{0, 0, 0}, {1, 0, 1}}; }),
-      bad([](SceneSpec& s) { s.box = Box{{0, 0, 0}, {1, 1, -1}}; }),
+      bad([](SceneSpec& s) {
+        s.box = Box{{0, 0, 0}, {1, 0, 1}};
+      }),
+      bad([](SceneSpec& s) {
+        s.box = Box{{0, 0, 0}, {1, 1, -1}};
+      }),
   };
   for (std::size_t k = 0; k < specs.size(); ++k) {
     EXPECT_THROW(validate_scene_spec(specs[k]), InputError) << "spec " << k;
@@ -202,7 +212,8 @@ TEST(SceneGenerate, InvalidSpecsThrow) {
       bad([](SceneSpec& s) { s.blob_radius = 0.5; }),
       bad([](SceneSpec& s) { s.size_ratio = 1.0; }),
   };
-  for (std::size_t k = 0; k < good.size(); ++k) EXPECT_NO_THROW(validate_scene_spec(good[k])) << "spec " << k;
+  for (std::size_t k = 0; k < good.size(); ++k)
+    EXPECT_NO_THROW(validate_scene_spec(good[k])) << "spec " << k;
 }
 
 TEST(SceneGenerate, KindNames) {

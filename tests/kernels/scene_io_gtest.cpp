@@ -140,10 +140,10 @@ TEST(SceneIo, TextFormatVariations) {
   TempDir dir;
   const Scene want = make_scene({{0.1, 0.2, 0.3}, {1.0, 0.0, 0.5}, {0.25, 0.75, 1.0}});
   const std::vector<std::string> texts = {
-      "0.1,0.2,0.3\n1,0,0.5\n0.25,0.75,1\n",                       // commas, no header
-      "x,y,z\n0.1,0.2,0.3\n1,0,0.5\n0.25,0.75,1\n",                // header
-      "0.1 0.2 0.3\n1 0 0.5\n0.25 0.75 1\n",                       // spaces
-      "x y z\n0.1\t0.2   0.3\n  1 0 0.5\n0.25 0.75 1",            // tabs, no final newline
+      "0.1,0.2,0.3\n1,0,0.5\n0.25,0.75,1\n",            // commas, no header
+      "x,y,z\n0.1,0.2,0.3\n1,0,0.5\n0.25,0.75,1\n",     // header
+      "0.1 0.2 0.3\n1 0 0.5\n0.25 0.75 1\n",            // spaces
+      "x y z\n0.1\t0.2   0.3\n  1 0 0.5\n0.25 0.75 1",  // tabs, no final newline
       "# comment\n\nx, y, z\n# another\n0.1, 0.2 ,0.3\n\n1,0,0.5\r\n0.25,0.75,1\n",  // spaces, CRLF
       "#x,y,z\n   # indented comment\n0.1,0.2,0.3\n1e0,0e0,5e-1\n0.25,0.75,1.0\n",
   };
@@ -159,7 +159,8 @@ TEST(SceneIo, FourthColumnIsTheDiameter) {
   TempDir dir;
   Scene want = make_scene({{0.1, 0.2, 0.3}, {1.0, 0.0, 0.5}});
   want.diameter = {0.01, 0.02};
-  for (const std::string text : {"x,y,z,d\n0.1,0.2,0.3,0.01\n1,0,0.5,0.02\n", "0.1 0.2 0.3 0.01\n1 0 0.5 0.02\n"}) {
+  for (const std::string text :
+       {"x,y,z,d\n0.1,0.2,0.3,0.01\n1,0,0.5,0.02\n", "0.1 0.2 0.3 0.01\n1 0 0.5 0.02\n"}) {
     const std::string path = dir.file("d.csv");
     write_text(path, text);
     expect_same_scene(read_scene(path, Box{}), want);
@@ -249,8 +250,10 @@ TEST(SceneIo, BadBinaryFilesThrow) {
     return path;
   };
   // Truncated anywhere: in the arrays, at the end of the header, inside the header.
-  expect_binary_error(variant("t1.bin", bytes.substr(0, bytes.size() - 8)), "truncated by one double");
-  expect_binary_error(variant("t2.bin", bytes.substr(0, bytes.size() - 1)), "truncated by one byte");
+  expect_binary_error(variant("t1.bin", bytes.substr(0, bytes.size() - 8)),
+                      "truncated by one double");
+  expect_binary_error(variant("t2.bin", bytes.substr(0, bytes.size() - 1)),
+                      "truncated by one byte");
   expect_binary_error(variant("t3.bin", bytes.substr(0, 72)), "header only");
   expect_binary_error(variant("t4.bin", bytes.substr(0, 40)), "cut inside the header");
   // Trailing bytes.

@@ -6,9 +6,9 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
 #include <cctype>
 #include <cmath>
-#include <array>
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
@@ -112,7 +112,8 @@ inline double float_tolerance(const Scene& scene, double reach) {
 
 // Every pair on which `got` (a float variant's canonical contacts) and `exact` (the double
 // reference) disagree is within float_tolerance of touching.
-inline ::testing::AssertionResult float_errors_near_contact_distance(const Scene& scene, double diameter,
+inline ::testing::AssertionResult float_errors_near_contact_distance(const Scene& scene,
+                                                                     double diameter,
                                                                      const ContactList& got,
                                                                      const ContactList& exact) {
   if (got.particle_count() != exact.particle_count()) {
@@ -124,18 +125,22 @@ inline ::testing::AssertionResult float_errors_near_contact_distance(const Scene
     const auto a = got.partners_of(i);
     const auto b = exact.partners_of(i);
     std::vector<std::uint32_t> differ;
-    std::set_symmetric_difference(a.begin(), a.end(), b.begin(), b.end(), std::back_inserter(differ));
+    std::set_symmetric_difference(a.begin(), a.end(), b.begin(), b.end(),
+                                  std::back_inserter(differ));
     for (const std::uint32_t j : differ) {
-      const double dx = scene.x[i] - scene.x[j], dy = scene.y[i] - scene.y[j], dz = scene.z[i] - scene.z[j];
+      const double dx = scene.x[i] - scene.x[j], dy = scene.y[i] - scene.y[j],
+                   dz = scene.z[i] - scene.z[j];
       const double r = std::sqrt(dx * dx + dy * dy + dz * dz);
-      const double reach = scene.has_diameters() ? 0.5 * (scene.diameter[i] + scene.diameter[j]) : diameter;
+      const double reach =
+          scene.has_diameters() ? 0.5 * (scene.diameter[i] + scene.diameter[j]) : diameter;
       const double tolerance = float_tolerance(scene, reach);
       if (std::abs(r - reach) > tolerance) {
         if (bad < 5) {
           failure << "\n  pair " << i << "-" << j << " at distance " << r << " (reach " << reach
                   << ", |r - reach| / reach = " << std::abs(r - reach) / reach << ", tolerance "
                   << tolerance / reach << ") judged "
-                  << (std::binary_search(a.begin(), a.end(), j) ? "in contact" : "not in contact") << " in float";
+                  << (std::binary_search(a.begin(), a.end(), j) ? "in contact" : "not in contact")
+                  << " in float";
         }
         ++bad;
       }
@@ -200,11 +205,13 @@ inline ::testing::AssertionResult same_contacts(const ContactList& got, const Co
 // in row j.
 inline ::testing::AssertionResult well_formed(const ContactList& list) {
   const std::size_t n = list.particle_count();
-  if (list.offsets.empty() || list.offsets.front() != 0 || list.offsets.back() != list.partners.size()) {
+  if (list.offsets.empty() || list.offsets.front() != 0 ||
+      list.offsets.back() != list.partners.size()) {
     return ::testing::AssertionFailure() << "offsets do not span the partner array";
   }
   if (list.partners.size() % 2 != 0) {
-    return ::testing::AssertionFailure() << "odd number of partner entries " << list.partners.size();
+    return ::testing::AssertionFailure()
+           << "odd number of partner entries " << list.partners.size();
   }
   for (std::size_t i = 0; i < n; ++i) {
     if (list.offsets[i + 1] < list.offsets[i]) {
@@ -231,7 +238,8 @@ inline ::testing::AssertionResult well_formed(const ContactList& list) {
 // Pair tests the full 27-cell stencil makes for each particle, counted independently of the
 // detector: the particles of the (up to) 27 cells around its cell, less itself. The half
 // stencil makes exactly half as many in total.
-inline std::vector<std::uint64_t> expected_full_candidates_per_particle(const Scene& scene, double diameter) {
+inline std::vector<std::uint64_t> expected_full_candidates_per_particle(const Scene& scene,
+                                                                        double diameter) {
   const double width = scene.has_diameters() ? scene.max_diameter() : diameter;
   const CellGrid grid(scene.box, width, CellNumbering::kLinear);
   const auto dims = grid.dims();
@@ -247,7 +255,8 @@ inline std::vector<std::uint64_t> expected_full_candidates_per_particle(const Sc
       for (int dy = -1; dy <= 1; ++dy) {
         for (int dx = -1; dx <= 1; ++dx) {
           const int cx = cell[i][0] + dx, cy = cell[i][1] + dy, cz = cell[i][2] + dz;
-          if (cx < 0 || cy < 0 || cz < 0 || cx >= dims[0] || cy >= dims[1] || cz >= dims[2]) continue;
+          if (cx < 0 || cy < 0 || cz < 0 || cx >= dims[0] || cy >= dims[1] || cz >= dims[2])
+            continue;
           tests[i] += count[grid.key(cx, cy, cz)];
         }
       }
@@ -277,8 +286,8 @@ inline std::vector<std::uint32_t> permutation(std::size_t n, std::uint64_t seed)
 }
 
 // Canonical contact list from a set of unordered pairs.
-inline ContactList list_from_pairs(std::size_t n,
-                                   const std::vector<std::pair<std::uint32_t, std::uint32_t>>& pairs) {
+inline ContactList list_from_pairs(
+    std::size_t n, const std::vector<std::pair<std::uint32_t, std::uint32_t>>& pairs) {
   std::vector<std::vector<std::uint32_t>> rows(n);
   for (const auto& [i, j] : pairs) {
     rows[i].push_back(j);

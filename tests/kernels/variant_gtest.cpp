@@ -20,9 +20,9 @@ TEST(Variant, EnumerationCoversTheWholeSpace) {
   EXPECT_EQ(space.schedules[0], (Schedule{ScheduleKind::kStatic, 0}));
   std::set<std::string> schedules;
   for (const auto& s : space.schedules) schedules.insert(to_string(s));
-  EXPECT_EQ(schedules, (std::set<std::string>{"static", "static,1", "static,7", "static,64", "dynamic,1",
-                                              "dynamic,7", "dynamic,64", "guided,1", "guided,7",
-                                              "guided,64"}));
+  EXPECT_EQ(schedules, (std::set<std::string>{"static", "static,1", "static,7", "static,64",
+                                              "dynamic,1", "dynamic,7", "dynamic,64", "guided,1",
+                                              "guided,7", "guided,64"}));
   const auto variants = enumerate(space);
   ASSERT_EQ(variants.size(), 2u * 3u * 2u * 10u * 2u);
   std::set<std::string> names;
@@ -49,12 +49,18 @@ TEST(Variant, RoundTripForEveryEnumeratedVariant) {
 }
 
 TEST(Variant, CanonicalText) {
-  EXPECT_EQ(to_string(Variant{LoopKind::kParticle, Order::kSorted, Stencil::kFull, {ScheduleKind::kStatic, 200}}),
+  EXPECT_EQ(to_string(Variant{
+                LoopKind::kParticle, Order::kSorted, Stencil::kFull, {ScheduleKind::kStatic, 200}}),
             "particle/sorted/full/static,200");
-  EXPECT_EQ(to_string(Variant{LoopKind::kCell, Order::kMorton, Stencil::kHalf, {ScheduleKind::kGuided, 4}}),
+  EXPECT_EQ(to_string(Variant{
+                LoopKind::kCell, Order::kMorton, Stencil::kHalf, {ScheduleKind::kGuided, 4}}),
             "cell/morton/half/guided,4");
-  EXPECT_EQ(to_string(Variant{LoopKind::kCell, Order::kUnsorted, Stencil::kFull, {}}), "cell/unsorted/full/static");
-  EXPECT_EQ(to_string(Variant{LoopKind::kCell, Order::kSorted, Stencil::kHalf, {ScheduleKind::kDynamic, 7},
+  EXPECT_EQ(to_string(Variant{LoopKind::kCell, Order::kUnsorted, Stencil::kFull, {}}),
+            "cell/unsorted/full/static");
+  EXPECT_EQ(to_string(Variant{LoopKind::kCell,
+                              Order::kSorted,
+                              Stencil::kHalf,
+                              {ScheduleKind::kDynamic, 7},
                               Precision::kFloat}),
             "cell/sorted/half/dynamic,7/float");
   EXPECT_EQ(to_string(Schedule{ScheduleKind::kStatic, 0}), "static");
@@ -77,10 +83,15 @@ TEST(Variant, CanonicalText) {
 
 TEST(Variant, PrecisionPart) {
   EXPECT_EQ(parse_variant("cell/sorted/half/dynamic,7/float").precision, Precision::kFloat);
-  EXPECT_EQ(parse_variant("cell/sorted/half/dynamic,7/double"), parse_variant("cell/sorted/half/dynamic,7"));
-  EXPECT_EQ(to_string(parse_variant("cell/sorted/half/dynamic,7/double")), "cell/sorted/half/dynamic,7");
-  EXPECT_EQ(parse_variant("particle/morton/full/guided/float"),
-            (Variant{LoopKind::kParticle, Order::kMorton, Stencil::kFull, {ScheduleKind::kGuided, 1}, Precision::kFloat}));
+  EXPECT_EQ(parse_variant("cell/sorted/half/dynamic,7/double"),
+            parse_variant("cell/sorted/half/dynamic,7"));
+  EXPECT_EQ(to_string(parse_variant("cell/sorted/half/dynamic,7/double")),
+            "cell/sorted/half/dynamic,7");
+  EXPECT_EQ(parse_variant("particle/morton/full/guided/float"), (Variant{LoopKind::kParticle,
+                                                                         Order::kMorton,
+                                                                         Stencil::kFull,
+                                                                         {ScheduleKind::kGuided, 1},
+                                                                         Precision::kFloat}));
   EXPECT_EQ(parse_precision("double"), Precision::kDouble);
   EXPECT_EQ(parse_precision("float"), Precision::kFloat);
   for (const char* text : {"", "single", "Float", "f32", "half"}) {
@@ -89,7 +100,8 @@ TEST(Variant, PrecisionPart) {
 }
 
 TEST(Variant, ThreePartFormMeansFullStencil) {
-  EXPECT_EQ(parse_variant("particle/sorted/static,200"), parse_variant("particle/sorted/full/static,200"));
+  EXPECT_EQ(parse_variant("particle/sorted/static,200"),
+            parse_variant("particle/sorted/full/static,200"));
   EXPECT_EQ(parse_variant("cell/morton/dynamic,3").stencil, Stencil::kFull);
   EXPECT_EQ(to_string(parse_variant("cell/unsorted/guided,9")), "cell/unsorted/full/guided,9");
 }
@@ -101,7 +113,8 @@ TEST(Variant, ScheduleDefaults) {
   EXPECT_EQ(parse_schedule("static"), (Schedule{ScheduleKind::kStatic, 0}));
   EXPECT_EQ(parse_schedule("static,1"), (Schedule{ScheduleKind::kStatic, 1}));
   EXPECT_EQ(parse_schedule("guided,1000000000"), (Schedule{ScheduleKind::kGuided, 1000000000}));
-  EXPECT_EQ(parse_variant("particle/unsorted/half/dynamic").schedule, (Schedule{ScheduleKind::kDynamic, 1}));
+  EXPECT_EQ(parse_variant("particle/unsorted/half/dynamic").schedule,
+            (Schedule{ScheduleKind::kDynamic, 1}));
 }
 
 TEST(Variant, ComponentParsers) {
@@ -144,7 +157,8 @@ TEST(Variant, BadStringsThrowInputError) {
   expect_input_error("particle", "particle");
   expect_input_error("", "");
   expect_input_error("particle/sorted/full/static/extra", "extra");
-  expect_input_error("particle/sorted/full/static/float/extra", "particle/sorted/full/static/float/extra");
+  expect_input_error("particle/sorted/full/static/float/extra",
+                     "particle/sorted/full/static/float/extra");
   expect_input_error("particle/sorted/full/static,1/", "precision");
   expect_input_error("particle/sorted/full/static/single", "single");
   // The precision needs the four-part form: a fourth part is always the schedule.
@@ -162,7 +176,8 @@ TEST(Variant, BadSchedulesThrowInputError) {
     EXPECT_THROW(parse_schedule(text), InputError) << "'" << text << "'";
   }
   for (const char* text : {"", "Cell", " cell"}) EXPECT_THROW(parse_loop(text), InputError) << text;
-  for (const char* text : {"", "Sorted", "z-order"}) EXPECT_THROW(parse_order(text), InputError) << text;
+  for (const char* text : {"", "Sorted", "z-order"})
+    EXPECT_THROW(parse_order(text), InputError) << text;
   for (const char* text : {"", "Full", "27"}) EXPECT_THROW(parse_stencil(text), InputError) << text;
 }
 
@@ -170,10 +185,10 @@ TEST(Variant, PaperVariants) {
   const auto variants = paper_variants();
   std::vector<std::string> names;
   for (const auto& v : variants) names.push_back(to_string(v));
-  EXPECT_EQ(names, (std::vector<std::string>{
-                       "particle/unsorted/full/static", "cell/unsorted/full/static",
-                       "particle/sorted/full/static", "cell/sorted/full/static",
-                       "particle/sorted/full/static,200"}));
+  EXPECT_EQ(names,
+            (std::vector<std::string>{"particle/unsorted/full/static", "cell/unsorted/full/static",
+                                      "particle/sorted/full/static", "cell/sorted/full/static",
+                                      "particle/sorted/full/static,200"}));
 }
 
 }  // namespace

@@ -136,7 +136,8 @@ TEST(Context, WarnsAboutOversubscription) {
   for (const auto& w : c.warnings) warned |= w.find("more threads than cores") != std::string::npos;
   EXPECT_TRUE(warned);
   const Context fine = collect_context("test", 1);
-  for (const auto& w : fine.warnings) EXPECT_EQ(w.find("more threads than cores"), std::string::npos);
+  for (const auto& w : fine.warnings)
+    EXPECT_EQ(w.find("more threads than cores"), std::string::npos);
 }
 
 }  // namespace

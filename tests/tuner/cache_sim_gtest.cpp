@@ -1,21 +1,32 @@
 // Small runs under valgrind's cache simulator: the paper's ordering (reordering cuts the L1
 // miss rate several-fold for both loops), several threads, and failures recorded, not zeros.
-#include "contactlab/tuner/cache_sim.hpp"
-
 #include <gtest/gtest.h>
 
+#include "contactlab/tuner/cache_sim.hpp"
 #include "tuner_test_support.hpp"
 
 namespace contactlab::tuner {
 namespace {
 
-CacheSimRequest child_request(const std::string& variant, int threads, const CacheGeometry& geometry) {
+CacheSimRequest child_request(const std::string& variant, int threads,
+                              const CacheGeometry& geometry) {
   CacheSimRequest r;
   r.geometry = geometry;
   r.executable = test::contactlab_exe();
-  r.arguments = {"detect",    "--scene",   "clustered", "--n",       "3000",
-                 "--diameter", "0.02",     "--seed",    "7",         "--variant",
-                 variant,     "--threads", std::to_string(threads), "--cache-sim-child"};
+  r.arguments = {"detect",
+                 "--scene",
+                 "clustered",
+                 "--n",
+                 "3000",
+                 "--diameter",
+                 "0.02",
+                 "--seed",
+                 "7",
+                 "--variant",
+                 variant,
+                 "--threads",
+                 std::to_string(threads),
+                 "--cache-sim-child"};
   r.threads = threads;
   return r;
 }
@@ -23,8 +34,10 @@ CacheSimRequest child_request(const std::string& variant, int threads, const Cac
 TEST(CacheSim, ReorderingCutsTheL1MissRateForBothLoops) {
   if (const auto why = test::valgrind_obstacle(); !why.empty()) GTEST_SKIP() << why;
   for (const std::string loop : {"particle", "cell"}) {
-    const CounterRecord unsorted = simulate_caches(child_request(loop + "/unsorted/static", 1, fx10_geometry()));
-    const CounterRecord sorted = simulate_caches(child_request(loop + "/sorted/static", 1, fx10_geometry()));
+    const CounterRecord unsorted =
+        simulate_caches(child_request(loop + "/unsorted/static", 1, fx10_geometry()));
+    const CounterRecord sorted =
+        simulate_caches(child_request(loop + "/sorted/static", 1, fx10_geometry()));
     ASSERT_TRUE(unsorted.available) << unsorted.reason;
     ASSERT_TRUE(sorted.available) << sorted.reason;
     EXPECT_EQ(sorted.source, "simulated:fx10");
@@ -39,8 +52,10 @@ TEST(CacheSim, ReorderingCutsTheL1MissRateForBothLoops) {
 
 TEST(CacheSim, EveryThreadIsCounted) {
   if (const auto why = test::valgrind_obstacle(); !why.empty()) GTEST_SKIP() << why;
-  const CounterRecord one = simulate_caches(child_request("particle/sorted/static", 1, fx10_geometry()));
-  const CounterRecord two = simulate_caches(child_request("particle/sorted/static", 2, fx10_geometry()));
+  const CounterRecord one =
+      simulate_caches(child_request("particle/sorted/static", 1, fx10_geometry()));
+  const CounterRecord two =
+      simulate_caches(child_request("particle/sorted/static", 2, fx10_geometry()));
   ASSERT_TRUE(one.available) << one.reason;
   ASSERT_TRUE(two.available) << two.reason;
   auto reads = [](const CounterRecord& r) {
@@ -59,8 +74,8 @@ TEST(CacheSim, EveryThreadIsCounted) {
 
 TEST(CacheSim, CustomGeometry) {
   if (const auto why = test::valgrind_obstacle(); !why.empty()) GTEST_SKIP() << why;
-  const CounterRecord r =
-      simulate_caches(child_request("cell/sorted/static", 1, parse_cache_geometry("custom:16K,4,64:256K,8,64")));
+  const CounterRecord r = simulate_caches(
+      child_request("cell/sorted/static", 1, parse_cache_geometry("custom:16K,4,64:256K,8,64")));
   ASSERT_TRUE(r.available) << r.reason;
   EXPECT_EQ(r.source, "simulated:custom");
 }
@@ -72,7 +87,8 @@ TEST(CacheSim, ProgramWithoutTheToggleIsRecordedAsUnavailable) {
   r.executable = "/bin/true";
   const CounterRecord record = simulate_caches(r);
   EXPECT_FALSE(record.available);
-  EXPECT_NE(record.reason.find("no data accesses were collected"), std::string::npos) << record.reason;
+  EXPECT_NE(record.reason.find("no data accesses were collected"), std::string::npos)
+      << record.reason;
   EXPECT_FALSE(record.l1_miss_percent.has_value());
 }
 

@@ -45,7 +45,8 @@ TEST(DetectCli, SoftwareEventsPerThread) {
   if (!papi_info().initialized) GTEST_SKIP() << "PAPI unavailable: " << papi_info().error;
   test::TempDir dir;
   const std::string json = dir.file("r.json");
-  const auto r = detect("--threads 2 --repeat 1 --warmup 0 --papi-events perf::TASK-CLOCK --json " + json);
+  const auto r =
+      detect("--threads 2 --repeat 1 --warmup 0 --papi-events perf::TASK-CLOCK --json " + json);
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const CounterRecord c = read_result_file(json).runs[0].counters[0];
   if (!c.available) GTEST_SKIP() << c.reason;
@@ -57,7 +58,9 @@ TEST(DetectCli, CacheSimulationFx10) {
   if (const auto why = test::valgrind_obstacle(); !why.empty()) GTEST_SKIP() << why;
   test::TempDir dir;
   const std::string json = dir.file("r.json");
-  const auto r = detect("--variant cell/unsorted/static --threads 1 --repeat 1 --warmup 0 --cache-sim fx10 --json " + json);
+  const auto r = detect(
+      "--variant cell/unsorted/static --threads 1 --repeat 1 --warmup 0 --cache-sim fx10 --json " +
+      json);
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const CounterRecord c = read_result_file(json).runs[0].counters[0];
   EXPECT_EQ(c.source, "simulated:fx10");
@@ -71,8 +74,9 @@ TEST(DetectCli, CacheSimulationFx10) {
 TEST(DetectCli, MissingValgrindIsRecorded) {
   test::TempDir dir;
   const std::string json = dir.file("r.json");
-  const auto r = test::run_command("CONTACTLAB_VALGRIND=/nonexistent/valgrind " + test::contactlab_exe() + kScene +
-                                   "--repeat 1 --cache-sim fx10 --json " + json);
+  const auto r =
+      test::run_command("CONTACTLAB_VALGRIND=/nonexistent/valgrind " + test::contactlab_exe() +
+                        kScene + "--repeat 1 --cache-sim fx10 --json " + json);
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const CounterRecord c = read_result_file(json).runs[0].counters[0];
   EXPECT_FALSE(c.available);
@@ -82,7 +86,9 @@ TEST(DetectCli, MissingValgrindIsRecorded) {
 TEST(DetectCli, AdaptiveRepetition) {
   test::TempDir dir;
   const std::string json = dir.file("r.json");
-  const auto r = detect("--threads 1 --repeat 2 --adaptive --target-ci 0.5 --time-budget 10 --max-repeat 40 --json " + json);
+  const auto r = detect(
+      "--threads 1 --repeat 2 --adaptive --target-ci 0.5 --time-budget 10 --max-repeat 40 --json " +
+      json);
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const RunRecord run = read_result_file(json).runs[0];
   EXPECT_GE(run.aggregates->repetitions, 2);
@@ -113,7 +119,8 @@ TEST(DetectCli, BadInputIsOneClearError) {
   expect_rejected("--cache-sim sparc", "unknown cache geometry 'sparc'");
   expect_rejected("--adaptive --target-ci 2", "--target-ci");
   expect_rejected("--cache-sim-child", "--cache-sim-child is internal");
-  if (papi_info().initialized) expect_rejected("--papi-events PAPI_NOT_AN_EVENT_XYZ", "unknown PAPI event");
+  if (papi_info().initialized)
+    expect_rejected("--papi-events PAPI_NOT_AN_EVENT_XYZ", "unknown PAPI event");
 }
 
 }  // namespace

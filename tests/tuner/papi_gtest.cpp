@@ -1,11 +1,10 @@
 // The per-thread PAPI path, proved with software events that exist even where the machine
 // exposes no hardware counters (virtual machines): perf::TASK-CLOCK and perf::PAGE-FAULTS.
-#include "contactlab/tuner/papi_counters.hpp"
-
 #include <gtest/gtest.h>
 
 #include "contactlab/kernels/error.hpp"
 #include "contactlab/tuner/measure.hpp"
+#include "contactlab/tuner/papi_counters.hpp"
 #include "tuner_test_support.hpp"
 
 namespace contactlab::tuner {
@@ -14,10 +13,8 @@ namespace {
 const std::vector<std::string> kSoftware{"perf::TASK-CLOCK", "perf::PAGE-FAULTS"};
 
 // GTEST_SKIP returns from the function it is in, so this is a macro.
-#define SKIP_WITHOUT_PAPI()                                                                          \
+#define SKIP_WITHOUT_PAPI() \
   if (!papi_info().initialized) GTEST_SKIP() << "no PAPI here: " << papi_info().error
-
-
 
 const EventCount& event(const CounterRecord& r, const std::string& name) {
   for (const auto& e : r.events) {
@@ -91,7 +88,8 @@ TEST(Papi, UnknownEventNameIsAnInputError) {
     PapiCounters counters({"PAPI_NOT_AN_EVENT_XYZ"});
     FAIL() << "expected InputError";
   } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("unknown PAPI event 'PAPI_NOT_AN_EVENT_XYZ'"), std::string::npos);
+    EXPECT_NE(std::string(e.what()).find("unknown PAPI event 'PAPI_NOT_AN_EVENT_XYZ'"),
+              std::string::npos);
   }
   EXPECT_THROW(PapiCounters({"perf::NO-SUCH-EVENT"}), InputError);
 }
@@ -143,7 +141,8 @@ TEST(Papi, MeasureDetectionKeepsCountersOutOfTheTimedRuns) {
   measure.papi = &counters;
   ContactDetector detector;
   DetectOptions options{parse_variant("particle/sorted/static,64"), spec.diameter, 2, nullptr};
-  const RunRecord run = measure_detection(detector, scene, describe_generated_scene(spec, scene), options, measure);
+  const RunRecord run =
+      measure_detection(detector, scene, describe_generated_scene(spec, scene), options, measure);
   ASSERT_EQ(run.counters.size(), 1u);
   EXPECT_EQ(run.counters[0].source, "papi");
   if (run.counters[0].available) {

@@ -1,7 +1,5 @@
 // The result schema: a real run survives a write/read round trip unchanged; the strict reader
 // rejects unknown, missing and mistyped fields with the JSON path; the documented example is valid.
-#include "contactlab/tuner/result_schema.hpp"
-
 #include <gtest/gtest.h>
 
 #include <fstream>
@@ -10,6 +8,7 @@
 
 #include "contactlab/kernels/error.hpp"
 #include "contactlab/tuner/measure.hpp"
+#include "contactlab/tuner/result_schema.hpp"
 #include "tuner_test_support.hpp"
 
 namespace contactlab::tuner {
@@ -29,7 +28,8 @@ ResultFile sample_result() {
   ContactDetector detector;
   ResultFile file;
   file.context = collect_context("contactlab detect --test", 2);
-  RunRecord run = measure_detection(detector, scene, describe_generated_scene(spec, scene), options, measure);
+  RunRecord run =
+      measure_detection(detector, scene, describe_generated_scene(spec, scene), options, measure);
   CounterRecord simulated;
   simulated.source = "simulated:fx10";
   simulated.available = true;
@@ -39,8 +39,8 @@ ResultFile sample_result() {
   simulated.l2_formula = "100 * (DLmr + DLmw) / (Dr + Dw)";
   simulated.counted_runs = 1;
   simulated.events = {{"Dr", 1000, {}}, {"D1mr", 45, {}}};
-  simulated.simulation = SimulationRecord{CacheGeometry{"fx10", {32768, 2, 128}, {12582912, 24, 128}, "x", true},
-                                          "valgrind", 1, 0.5};
+  simulated.simulation = SimulationRecord{
+      CacheGeometry{"fx10", {32768, 2, 128}, {12582912, 24, 128}, "x", true}, "valgrind", 1, 0.5};
   run.counters.push_back(simulated);
   CounterRecord papi;
   papi.source = "papi";
@@ -99,7 +99,8 @@ TEST(ResultSchema, RecordsWhatEveryResultNeeds) {
   EXPECT_EQ(run["aggregates"]["total_s"]["count"], 4);
   EXPECT_EQ(run["samples"]["imbalance"].size(), 4u);
   for (const auto& c : run["counters"]) {
-    EXPECT_TRUE(c["source"] == "papi" || c["source"].get<std::string>().rfind("simulated:", 0) == 0);
+    EXPECT_TRUE(c["source"] == "papi" ||
+                c["source"].get<std::string>().rfind("simulated:", 0) == 0);
   }
 }
 
@@ -133,7 +134,8 @@ TEST(ResultSchema, RejectsWrongTypesWithThePath) {
   EXPECT_EQ(rejection(j), "$.runs[0].samples.setup_s[2]: expected number, got string");
   j = sample_json();
   j["runs"][0]["work"]["contact_pairs"] = -3;
-  EXPECT_EQ(rejection(j), "$.runs[0].work.contact_pairs: expected non-negative integer, got number");
+  EXPECT_EQ(rejection(j),
+            "$.runs[0].work.contact_pairs: expected non-negative integer, got number");
   j = sample_json();
   j["runs"][0]["parameters"]["threads"] = 2.5;
   EXPECT_EQ(rejection(j), "$.runs[0].parameters.threads: expected integer, got number");
@@ -161,7 +163,8 @@ TEST(ResultSchema, RejectsInconsistentRecords) {
   EXPECT_NE(rejection(j).find("$.runs[0].counters[0]: source 'guessed'"), std::string::npos);
   j = sample_json();
   j["runs"][0]["counters"][0]["simulation"] = nullptr;
-  EXPECT_EQ(rejection(j), "$.runs[0].counters[0]: a simulated source needs its 'simulation' record");
+  EXPECT_EQ(rejection(j),
+            "$.runs[0].counters[0]: a simulated source needs its 'simulation' record");
   j = sample_json();
   j["runs"][0]["samples"]["detect_s"].push_back(1.0);
   EXPECT_NE(rejection(j).find("$.runs[0].samples: "), std::string::npos);
@@ -173,7 +176,8 @@ TEST(ResultSchema, RejectsInconsistentRecords) {
   EXPECT_EQ(rejection(j), "$.runs[1]: a run with status 'failed' needs a message");
   j = sample_json();
   j["runs"][0]["aggregates"]["stop_reason"] = "tired";
-  EXPECT_NE(rejection(j).find("$.runs[0].aggregates: stop_reason: unknown stop reason 'tired'"), std::string::npos);
+  EXPECT_NE(rejection(j).find("$.runs[0].aggregates: stop_reason: unknown stop reason 'tired'"),
+            std::string::npos);
 }
 
 TEST(ResultSchema, FileErrorsNameTheFile) {

@@ -1,7 +1,5 @@
 // Statistics with known answers: medians, the order-statistic interval of the median, load
 // imbalance, and the repetition driver (fixed, adaptive, budget, maximum).
-#include "contactlab/tuner/statistics.hpp"
-
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -11,6 +9,7 @@
 #include <vector>
 
 #include "contactlab/kernels/error.hpp"
+#include "contactlab/tuner/statistics.hpp"
 
 namespace contactlab::tuner {
 namespace {
@@ -132,7 +131,8 @@ TEST(RepeatMeasurement, FixedCountRunsWarmUpThenRepetitions) {
   p.warmup = 2;
   p.repeat = 5;
   int warm = 0, timed = 0;
-  const RepetitionOutcome o = repeat_measurement(p, [&] { ++warm; }, [&] { return double(++timed); });
+  const RepetitionOutcome o = repeat_measurement(
+      p, [&] { ++warm; }, [&] { return double(++timed); });
   EXPECT_EQ(warm, 2);
   EXPECT_EQ(timed, 5);
   EXPECT_EQ(o.warmup_runs, 2);
@@ -148,7 +148,8 @@ TEST(RepeatMeasurement, AdaptiveStopsWhenTheIntervalIsNarrow) {
   p.target_relative_half_width = 0.02;
   p.time_budget_s = 1e9;
   // Constant samples: the interval is a point once 6 samples reach 95% coverage.
-  const RepetitionOutcome o = repeat_measurement(p, [] {}, [] { return 1.0; });
+  const RepetitionOutcome o = repeat_measurement(
+      p, [] {}, [] { return 1.0; });
   EXPECT_EQ(o.stop, StopReason::kTargetReached);
   EXPECT_EQ(o.repetitions, 6);
 }
@@ -161,7 +162,8 @@ TEST(RepeatMeasurement, AdaptiveStopsAtTheMaximum) {
   p.time_budget_s = 1e9;
   p.max_repeat = 17;
   int i = 0;
-  const RepetitionOutcome o = repeat_measurement(p, [] {}, [&] { return (++i % 2) ? 1.0 : 100.0; });
+  const RepetitionOutcome o = repeat_measurement(
+      p, [] {}, [&] { return (++i % 2) ? 1.0 : 100.0; });
   EXPECT_EQ(o.stop, StopReason::kMaxRepeat);
   EXPECT_EQ(o.repetitions, 17);
 }
@@ -173,7 +175,8 @@ TEST(RepeatMeasurement, AdaptiveStopsWhenTheBudgetIsSpent) {
   p.adaptive = true;
   p.time_budget_s = 1e-12;  // spent by the first run: stop at the minimum count
   int i = 0;
-  const RepetitionOutcome o = repeat_measurement(p, [] {}, [&] { return (++i % 2) ? 1.0 : 100.0; });
+  const RepetitionOutcome o = repeat_measurement(
+      p, [] {}, [&] { return (++i % 2) ? 1.0 : 100.0; });
   EXPECT_EQ(o.stop, StopReason::kTimeBudget);
   EXPECT_EQ(o.repetitions, 4);
 }

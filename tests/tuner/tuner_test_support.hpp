@@ -48,7 +48,8 @@ inline std::string valgrind_obstacle() {
 class TempDir {
  public:
   TempDir() {
-    std::string pattern = (std::filesystem::temp_directory_path() / "contactlab-tuner-test-XXXXXX").string();
+    std::string pattern =
+        (std::filesystem::temp_directory_path() / "contactlab-tuner-test-XXXXXX").string();
     if (!::mkdtemp(pattern.data())) throw std::runtime_error("mkdtemp failed");
     path_ = pattern;
   }

@@ -32,20 +32,23 @@ bool is_power_of_two(std::uint64_t v) { return v != 0 && (v & (v - 1)) == 0; }
 
 void validate_level(const std::string& geometry, const char* level, const CacheLevel& c) {
   auto fail = [&](const std::string& what) {
-    throw InputError(fmt::format("cache geometry '{}': {} ({} B, {}-way, {} B lines): {}", geometry, level,
-                                 c.size_bytes, c.associativity, c.line_bytes, what));
+    throw InputError(fmt::format("cache geometry '{}': {} ({} B, {}-way, {} B lines): {}", geometry,
+                                 level, c.size_bytes, c.associativity, c.line_bytes, what));
   };
   if (c.line_bytes < 16 || !is_power_of_two(static_cast<std::uint64_t>(c.line_bytes))) {
     fail("line size must be a power of two >= 16 bytes");
   }
   if (c.associativity < 1) fail("associativity must be >= 1");
-  if (c.size_bytes <= static_cast<std::uint64_t>(c.line_bytes)) fail("size must exceed the line size");
-  if (static_cast<std::uint64_t>(c.associativity) > c.size_bytes / static_cast<std::uint64_t>(c.line_bytes)) {
+  if (c.size_bytes <= static_cast<std::uint64_t>(c.line_bytes))
+    fail("size must exceed the line size");
+  if (static_cast<std::uint64_t>(c.associativity) >
+      c.size_bytes / static_cast<std::uint64_t>(c.line_bytes)) {
     fail("associativity exceeds size / line size");
   }
   const std::uint64_t way_bytes = std::uint64_t(c.associativity) * std::uint64_t(c.line_bytes);
   if (c.size_bytes % way_bytes != 0 || !is_power_of_two(c.size_bytes / way_bytes)) {
-    fail(fmt::format("set count size / (ways * line) = {} / {} is not a power of two", c.size_bytes, way_bytes));
+    fail(fmt::format("set count size / (ways * line) = {} / {} is not a power of two", c.size_bytes,
+                     way_bytes));
   }
 }
 
@@ -58,15 +61,19 @@ std::uint64_t parse_size(std::string_view text, const std::string& whole) {
     multiplier = 1024 * 1024;
     text.remove_suffix(1);
   }
-  if (text.empty() || text.size() > 12 || text.find_first_not_of("0123456789") != std::string_view::npos) {
-    throw InputError(fmt::format("cache geometry '{}': '{}' is not a size (bytes, or with K or M)", whole, text));
+  if (text.empty() || text.size() > 12 ||
+      text.find_first_not_of("0123456789") != std::string_view::npos) {
+    throw InputError(fmt::format("cache geometry '{}': '{}' is not a size (bytes, or with K or M)",
+                                 whole, text));
   }
   return std::stoull(std::string(text)) * multiplier;
 }
 
 int parse_int(std::string_view text, const std::string& whole) {
-  if (text.empty() || text.size() > 9 || text.find_first_not_of("0123456789") != std::string_view::npos) {
-    throw InputError(fmt::format("cache geometry '{}': '{}' is not a positive integer", whole, text));
+  if (text.empty() || text.size() > 9 ||
+      text.find_first_not_of("0123456789") != std::string_view::npos) {
+    throw InputError(
+        fmt::format("cache geometry '{}': '{}' is not a positive integer", whole, text));
   }
   return std::stoi(std::string(text));
 }
@@ -76,7 +83,8 @@ CacheLevel parse_level(std::string_view text, const std::string& whole) {
   std::size_t pos = 0;
   for (;;) {
     const auto comma = text.find(',', pos);
-    parts.push_back(text.substr(pos, comma == std::string_view::npos ? std::string_view::npos : comma - pos));
+    parts.push_back(
+        text.substr(pos, comma == std::string_view::npos ? std::string_view::npos : comma - pos));
     if (comma == std::string_view::npos) break;
     pos = comma + 1;
   }
@@ -171,7 +179,8 @@ std::string level_flag(const CacheLevel& c) {
   return fmt::format("{},{},{}", c.size_bytes, c.associativity, c.line_bytes);
 }
 
-constexpr const char* kRegion = "detection loop, every OpenMP thread (collection toggled per thread)";
+constexpr const char* kRegion =
+    "detection loop, every OpenMP thread (collection toggled per thread)";
 
 }  // namespace
 
@@ -197,15 +206,17 @@ CacheGeometry host_geometry() {
     if (c.level == 2 && c.type != "instruction" && !l2) l2 = &c;
   }
   if (!l1 || !l2) {
-    throw InputError(fmt::format("cache geometry 'host': cannot read this machine's {} (topology from {})",
-                                 !l1 ? "L1 data cache" : "L2 cache", m.topology_source));
+    throw InputError(
+        fmt::format("cache geometry 'host': cannot read this machine's {} (topology from {})",
+                    !l1 ? "L1 data cache" : "L2 cache", m.topology_source));
   }
   for (const CacheInfo* c : {l1, l2}) {
     if (c->associativity <= 0 || c->line_bytes <= 0) {
-      throw InputError(fmt::format(
-          "cache geometry 'host': L{} associativity or line size unknown ({}-way, {} B lines, from {}); "
-          "give it as custom:...",
-          c->level, c->associativity, c->line_bytes, m.topology_source));
+      throw InputError(
+          fmt::format("cache geometry 'host': L{} associativity or line size unknown ({}-way, {} B "
+                      "lines, from {}); "
+                      "give it as custom:...",
+                      c->level, c->associativity, c->line_bytes, m.topology_source));
     }
   }
   CacheGeometry g;
@@ -230,7 +241,8 @@ CacheGeometry parse_cache_geometry(std::string_view text) {
     const std::string_view rest = text.substr(kCustom.size());
     const auto colon = rest.find(':');
     if (colon == std::string_view::npos) {
-      throw InputError(fmt::format("cache geometry '{}': expected custom:L1SIZE,WAYS,LINE:L2SIZE,WAYS,LINE", whole));
+      throw InputError(fmt::format(
+          "cache geometry '{}': expected custom:L1SIZE,WAYS,LINE:L2SIZE,WAYS,LINE", whole));
     }
     CacheGeometry g;
     g.name = "custom";
@@ -241,8 +253,10 @@ CacheGeometry parse_cache_geometry(std::string_view text) {
     validate_geometry(g);
     return g;
   }
-  throw InputError(fmt::format(
-      "unknown cache geometry '{}' (expected host, fx10 or custom:L1SIZE,WAYS,LINE:L2SIZE,WAYS,LINE)", whole));
+  throw InputError(
+      fmt::format("unknown cache geometry '{}' (expected host, fx10 or "
+                  "custom:L1SIZE,WAYS,LINE:L2SIZE,WAYS,LINE)",
+                  whole));
 }
 
 void validate_geometry(const CacheGeometry& g) {
@@ -270,7 +284,8 @@ std::uint64_t CallgrindTotals::get(std::string_view event) const {
   for (std::size_t i = 0; i < events.size(); ++i) {
     if (events[i] == event) return i < totals.size() ? totals[i] : 0;
   }
-  throw InputError(fmt::format("callgrind output has no event '{}' (was --cache-sim=yes given?)", event));
+  throw InputError(
+      fmt::format("callgrind output has no event '{}' (was --cache-sim=yes given?)", event));
 }
 
 CallgrindTotals read_callgrind_totals(const std::string& path) {
@@ -291,7 +306,8 @@ CallgrindTotals read_callgrind_totals(const std::string& path) {
   }
   if (t.events.empty()) throw InputError(path + ": no 'events:' line in callgrind output");
   const std::string& values = !totals_line.empty() ? totals_line : summary_line;
-  if (values.empty()) throw InputError(path + ": no 'totals:' or 'summary:' line in callgrind output");
+  if (values.empty())
+    throw InputError(path + ": no 'totals:' or 'summary:' line in callgrind output");
   std::istringstream words(values);
   for (std::string w; words >> w;) {
     if (w.find_first_not_of("0123456789") != std::string::npos) {
@@ -327,21 +343,25 @@ CounterRecord simulate_caches(const CacheSimRequest& request) {
     return r;
   };
   if (!callgrind_toggle_compiled_in()) {
-    return unavailable("built without valgrind/callgrind.h: the detection region cannot be isolated");
+    return unavailable(
+        "built without valgrind/callgrind.h: the detection region cannot be isolated");
   }
   const std::string valgrind = find_valgrind(request.valgrind);
   if (valgrind.empty()) {
-    return unavailable(request.valgrind.empty() && !std::getenv("CONTACTLAB_VALGRIND")
-                           ? "valgrind not found on PATH (install valgrind or set CONTACTLAB_VALGRIND)"
-                           : "valgrind '" + (request.valgrind.empty() ? std::string(std::getenv("CONTACTLAB_VALGRIND"))
-                                                                      : request.valgrind) +
-                                 "' is not an executable file");
+    return unavailable(
+        request.valgrind.empty() && !std::getenv("CONTACTLAB_VALGRIND")
+            ? "valgrind not found on PATH (install valgrind or set CONTACTLAB_VALGRIND)"
+            : "valgrind '" +
+                  (request.valgrind.empty() ? std::string(std::getenv("CONTACTLAB_VALGRIND"))
+                                            : request.valgrind) +
+                  "' is not an executable file");
   }
 
   std::error_code ec;
   std::string pattern = (fs::temp_directory_path(ec) / "contactlab-cachesim-XXXXXX").string();
   if (!::mkdtemp(pattern.data())) {
-    return unavailable(fmt::format("cannot create a temporary directory: {}", std::strerror(errno)));
+    return unavailable(
+        fmt::format("cannot create a temporary directory: {}", std::strerror(errno)));
   }
   const fs::path dir(pattern);
   const std::string out_file = (dir / "callgrind.out").string();
@@ -371,8 +391,9 @@ CounterRecord simulate_caches(const CacheSimRequest& request) {
   };
   if (status < 0) return finish(unavailable(error));
   if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
-    const std::string how = WIFEXITED(status) ? fmt::format("exited with status {}", WEXITSTATUS(status))
-                                              : fmt::format("was killed by signal {}", WTERMSIG(status));
+    const std::string how = WIFEXITED(status)
+                                ? fmt::format("exited with status {}", WEXITSTATUS(status))
+                                : fmt::format("was killed by signal {}", WTERMSIG(status));
     std::string detail = tail_of_file(child_log, 2);
     if (detail.empty()) detail = tail_of_file(log_file, 3);
     return finish(unavailable(fmt::format("the simulated run {}: {}", how, detail)));

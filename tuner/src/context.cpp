@@ -70,7 +70,8 @@ int count_cpus_in_list(const std::string& list) {
   std::size_t pos = 0;
   while (pos < list.size()) {
     const auto comma = list.find(',', pos);
-    const std::string part = list.substr(pos, comma == std::string::npos ? std::string::npos : comma - pos);
+    const std::string part =
+        list.substr(pos, comma == std::string::npos ? std::string::npos : comma - pos);
     const auto dash = part.find('-');
     if (!part.empty()) {
       count += dash == std::string::npos
@@ -108,7 +109,8 @@ MachineInfo sysfs_machine() {
     CacheInfo c;
     c.level = std::atoi(level.c_str());
     std::string type = read_first_line(base + "type");
-    std::transform(type.begin(), type.end(), type.begin(), [](unsigned char ch) { return std::tolower(ch); });
+    std::transform(type.begin(), type.end(), type.begin(),
+                   [](unsigned char ch) { return std::tolower(ch); });
     c.type = type;
     c.size_bytes = parse_sysfs_size(read_first_line(base + "size"));
     c.line_bytes = std::atoi(read_first_line(base + "coherency_line_size").c_str());
@@ -141,8 +143,8 @@ MachineInfo hwloc_machine() {
   }
   if (m.cpu_model == "unknown") m.cpu_model = cpuinfo_model();
   for (const hwloc_obj_type_t type :
-       {HWLOC_OBJ_L1CACHE, HWLOC_OBJ_L1ICACHE, HWLOC_OBJ_L2CACHE, HWLOC_OBJ_L2ICACHE, HWLOC_OBJ_L3CACHE,
-        HWLOC_OBJ_L3ICACHE, HWLOC_OBJ_L4CACHE, HWLOC_OBJ_L5CACHE}) {
+       {HWLOC_OBJ_L1CACHE, HWLOC_OBJ_L1ICACHE, HWLOC_OBJ_L2CACHE, HWLOC_OBJ_L2ICACHE,
+        HWLOC_OBJ_L3CACHE, HWLOC_OBJ_L3ICACHE, HWLOC_OBJ_L4CACHE, HWLOC_OBJ_L5CACHE}) {
     const int count = hwloc_get_nbobjs_by_type(topology, type);
     if (count <= 0) continue;
     const hwloc_obj_t obj = hwloc_get_obj_by_type(topology, type, 0);
@@ -234,8 +236,12 @@ const MachineInfo& machine_info() {
 
 BuildRecord build_record() {
   const BuildInfo& b = build_info();
-  return {std::string(b.version),    std::string(b.compiler),   std::string(b.flags),
-          std::string(b.build_type), b.native,                  std::string(b.git_commit),
+  return {std::string(b.version),
+          std::string(b.compiler),
+          std::string(b.flags),
+          std::string(b.build_type),
+          b.native,
+          std::string(b.git_commit),
           b.git_dirty};
 }
 
@@ -260,8 +266,8 @@ Context collect_context(const std::string& command_line, int threads) {
   o.env_wait_policy = env("OMP_WAIT_POLICY");
   c.mpi_ranks = mpi_ranks_from_environment();
   const PapiInfo& p = papi_info();
-  c.papi = {p.built_with_papi, p.initialized,   p.version,        p.error,
-            p.hardware_counters, p.components, p.presets_listed, p.cache_events};
+  c.papi = {p.built_with_papi,   p.initialized, p.version,        p.error,
+            p.hardware_counters, p.components,  p.presets_listed, p.cache_events};
   c.date_utc = utc_now();
   c.command_line = command_line;
   c.warnings = context_warnings(c);

@@ -7,8 +7,9 @@
 
 namespace contactlab::tuner {
 
-RunRecord measure_detection(ContactDetector& detector, const Scene& scene, const SceneRecord& scene_record,
-                            const DetectOptions& options, const MeasureOptions& measure) {
+RunRecord measure_detection(ContactDetector& detector, const Scene& scene,
+                            const SceneRecord& scene_record, const DetectOptions& options,
+                            const MeasureOptions& measure) {
   validate(measure.repetition);
   DetectOptions timed = options;
   timed.observer = nullptr;
@@ -61,15 +62,18 @@ RunRecord measure_detection(ContactDetector& detector, const Scene& scene, const
   a.measurement_s = outcome.elapsed_s;
   record.aggregates = a;
   record.parameters.threads = last.threads;
-  record.work = RunWork{last.candidate_tests, last.contact_pairs, last.max_cell_occupancy, last.grid_dims};
+  record.work =
+      RunWork{last.candidate_tests, last.contact_pairs, last.max_cell_occupancy, last.grid_dims};
 
   const auto [lo, hi] = std::minmax_element(contact_counts.begin(), contact_counts.end());
   if (*lo != *hi) {
     record.status = RunStatus::kInvalid;
     record.message = fmt::format("contact count differs between repetitions ({} to {})", *lo, *hi);
-  } else if (measure.expected_contact_pairs && *measure.expected_contact_pairs != last.contact_pairs) {
+  } else if (measure.expected_contact_pairs &&
+             *measure.expected_contact_pairs != last.contact_pairs) {
     record.status = RunStatus::kInvalid;
-    record.message = fmt::format("{} contact pairs, expected {}", last.contact_pairs, *measure.expected_contact_pairs);
+    record.message = fmt::format("{} contact pairs, expected {}", last.contact_pairs,
+                                 *measure.expected_contact_pairs);
   }
   return record;
 }

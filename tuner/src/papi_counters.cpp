@@ -38,7 +38,9 @@ const std::vector<PapiFormula>& papi_l2_formulas() {
   static const std::vector<PapiFormula> formulas{
       {{"PAPI_L2_DCM"}, {"PAPI_LST_INS"}, "load/store instructions"},
       {{"PAPI_L2_DCM"}, {"PAPI_LD_INS", "PAPI_SR_INS"}, "load/store instructions"},
-      {{"PAPI_L2_TCM"}, {"PAPI_LST_INS"}, "load/store instructions (L2 misses include instruction fetches)"},
+      {{"PAPI_L2_TCM"},
+       {"PAPI_LST_INS"},
+       "load/store instructions (L2 misses include instruction fetches)"},
       // A local rate (misses per L2 access), not comparable with the per-instruction ones.
       {{"PAPI_L2_DCM"}, {"PAPI_L2_DCA"}, "L2 data accesses (local miss rate)"},
   };
@@ -89,7 +91,8 @@ std::optional<double> rate(const PapiFormula& f, const std::vector<EventCount>& 
   return 100.0 * num / den;
 }
 
-[[maybe_unused]] bool contains_all(const std::vector<std::string>& set, const std::vector<std::string>& wanted) {
+[[maybe_unused]] bool contains_all(const std::vector<std::string>& set,
+                                   const std::vector<std::string>& wanted) {
   return std::all_of(wanted.begin(), wanted.end(), [&](const std::string& w) {
     return std::find(set.begin(), set.end(), w) != set.end();
   });
@@ -157,9 +160,10 @@ const PapiInfo& papi_info() {
     i.built_with_papi = true;
     const int version = PAPI_library_init(PAPI_VER_CURRENT);
     if (version != PAPI_VER_CURRENT) {
-      i.error = version > 0 ? fmt::format("PAPI_library_init: version mismatch (library {:x}, header {:x})",
-                                          version, PAPI_VER_CURRENT)
-                            : "PAPI_library_init: " + papi_error(version);
+      i.error = version > 0
+                    ? fmt::format("PAPI_library_init: version mismatch (library {:x}, header {:x})",
+                                  version, PAPI_VER_CURRENT)
+                    : "PAPI_library_init: " + papi_error(version);
       return i;
     }
     const int rc = PAPI_thread_init(papi_thread_id);
@@ -251,7 +255,8 @@ PapiCounters::PapiCounters(std::vector<std::string> events) : impl_(std::make_un
   } else {
     // First usable candidate of each level, with the events of both fitting in one set.
     std::vector<std::string> failures;
-    for (auto [formulas, chosen] : {std::pair{&papi_l1_formulas(), &m.l1}, std::pair{&papi_l2_formulas(), &m.l2}}) {
+    for (auto [formulas, chosen] :
+         {std::pair{&papi_l1_formulas(), &m.l1}, std::pair{&papi_l2_formulas(), &m.l2}}) {
       for (const auto& f : *formulas) {
         std::vector<std::string> trial = m.names;
         for (const auto& e : formula_events(f)) {
@@ -362,7 +367,8 @@ const PapiInfo& papi_info() {
   static const PapiInfo info = [] {
     PapiInfo i;
     i.error = "built without PAPI";
-    for (const auto& name : all_formula_events()) i.cache_events.push_back({name, false, "built without PAPI"});
+    for (const auto& name : all_formula_events())
+      i.cache_events.push_back({name, false, "built without PAPI"});
     return i;
   }();
   return info;

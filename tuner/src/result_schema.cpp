@@ -30,7 +30,8 @@ RunStatus parse_run_status(std::string_view text) {
   for (const auto s : {RunStatus::kOk, RunStatus::kInvalid, RunStatus::kFailed}) {
     if (text == to_string(s)) return s;
   }
-  throw InputError("unknown run status '" + std::string(text) + "' (expected ok, invalid or failed)");
+  throw InputError("unknown run status '" + std::string(text) +
+                   "' (expected ok, invalid or failed)");
 }
 
 SceneRecord describe_generated_scene(const SceneSpec& spec, const Scene& scene) {
@@ -44,7 +45,8 @@ SceneRecord describe_generated_scene(const SceneSpec& spec, const Scene& scene) 
   r.blob_radius = spec.blob_radius;
   r.size_ratio = spec.size_ratio;
   r.blob_count = spec.blob_count;
-  r.box = {scene.box.lo[0], scene.box.lo[1], scene.box.lo[2], scene.box.hi[0], scene.box.hi[1], scene.box.hi[2]};
+  r.box = {scene.box.lo[0], scene.box.lo[1], scene.box.lo[2],
+           scene.box.hi[0], scene.box.hi[1], scene.box.hi[2]};
   r.checksum = fmt::format("{:016x}", scene_checksum(scene));
   return r;
 }
@@ -55,7 +57,8 @@ SceneRecord describe_file_scene(const std::string& path, const Scene& scene, dou
   r.path = path;
   r.n = scene.size();
   if (!scene.has_diameters()) r.diameter = diameter;
-  r.box = {scene.box.lo[0], scene.box.lo[1], scene.box.lo[2], scene.box.hi[0], scene.box.hi[1], scene.box.hi[2]};
+  r.box = {scene.box.lo[0], scene.box.lo[1], scene.box.lo[2],
+           scene.box.hi[0], scene.box.hi[1], scene.box.hi[2]};
   r.checksum = fmt::format("{:016x}", scene_checksum(scene));
   return r;
 }
@@ -87,7 +90,9 @@ json to_json_value(const RepetitionPolicy& v) {
 }
 
 json to_json_value(const CacheLevel& v) {
-  return {{"size_bytes", v.size_bytes}, {"associativity", v.associativity}, {"line_bytes", v.line_bytes},
+  return {{"size_bytes", v.size_bytes},
+          {"associativity", v.associativity},
+          {"line_bytes", v.line_bytes},
           {"sets", v.sets()}};
 }
 
@@ -265,7 +270,7 @@ void to_json(json& j, const RunRecord& v) {
        {"contact_check", v.contact_check ? json{{"reference", v.contact_check->reference},
                                                 {"missing_pairs", v.contact_check->missing_pairs},
                                                 {"extra_pairs", v.contact_check->extra_pairs}}
-                                          : json(nullptr)}};
+                                         : json(nullptr)}};
 }
 
 void to_json(json& j, const ResultFile& v) {
@@ -343,7 +348,8 @@ void read(const JsonIn& in, CacheLevel& out) {
   std::uint64_t sets = 0;
   o("sets", sets);
   o.finish();
-  if (sets != out.sets()) in.fail(fmt::format("sets = {} does not match size / (ways * line) = {}", sets, out.sets()));
+  if (sets != out.sets())
+    in.fail(fmt::format("sets = {} does not match size / (ways * line) = {}", sets, out.sets()));
 }
 
 void read(const JsonIn& in, CacheGeometry& out) {
@@ -390,7 +396,8 @@ void read(const JsonIn& in, CounterRecord& out) {
   }
   if (!out.available) {
     if (out.reason.empty()) in.fail("available is false but no reason is given");
-    if (out.l1_miss_percent || out.l2_miss_percent) in.fail("miss rates given although available is false");
+    if (out.l1_miss_percent || out.l2_miss_percent)
+      in.fail("miss rates given although available is false");
   }
 }
 
@@ -531,7 +538,9 @@ void read(const JsonIn& in, RunSamples& out) {
   const std::size_t n = out.setup_s.size();
   if (out.detect_s.size() != n || out.total_s.size() != n || out.thread_busy_s.size() != n ||
       out.imbalance.size() != n) {
-    in.fail("setup_s, detect_s, total_s, thread_busy_s and imbalance must have one entry per repetition");
+    in.fail(
+        "setup_s, detect_s, total_s, thread_busy_s and imbalance must have one entry per "
+        "repetition");
   }
 }
 
@@ -590,7 +599,8 @@ void read(const JsonIn& in, RunRecord& out) {
   o("contact_check", out.contact_check);
   o.finish();
   if (out.status != RunStatus::kFailed) {
-    if (!out.aggregates || !out.work) in.fail("a run with status '" + status + "' needs aggregates and work");
+    if (!out.aggregates || !out.work)
+      in.fail("a run with status '" + status + "' needs aggregates and work");
     if (static_cast<std::size_t>(out.aggregates->repetitions) != out.samples.total_s.size()) {
       in.fail("aggregates.repetitions does not match the number of samples");
     }
@@ -605,8 +615,8 @@ void read(const JsonIn& in, ResultFile& out) {
   o("schema_version", out.schema_version);
   if (out.schema_version != kSchemaVersion) {
     JsonIn(in.value()["schema_version"], in.path() + ".schema_version")
-        .fail(fmt::format("unsupported schema_version {} (this reader knows {})", out.schema_version,
-                          kSchemaVersion));
+        .fail(fmt::format("unsupported schema_version {} (this reader knows {})",
+                          out.schema_version, kSchemaVersion));
   }
   o("context", out.context);
   o("runs", out.runs);

@@ -37,7 +37,9 @@ double binomial_half_pmf(std::size_t n, std::size_t i) {
 
 }  // namespace
 
-double median(std::span<const double> values) { return median_of_sorted(sorted_copy(values, "median")); }
+double median(std::span<const double> values) {
+  return median_of_sorted(sorted_copy(values, "median"));
+}
 
 double order_statistic_coverage(std::size_t n, std::size_t k) {
   if (n == 0 || k == 0 || 2 * k > n + 1) {
@@ -123,11 +125,12 @@ void validate(const RepetitionPolicy& policy) {
          std::to_string(policy.target_relative_half_width));
   }
   if (!(policy.time_budget_s > 0.0) || !std::isfinite(policy.time_budget_s)) {
-    fail("time budget must be a positive number of seconds, got " + std::to_string(policy.time_budget_s));
+    fail("time budget must be a positive number of seconds, got " +
+         std::to_string(policy.time_budget_s));
   }
   if (policy.max_repeat < policy.repeat) {
-    fail("maximum repetitions (" + std::to_string(policy.max_repeat) + ") must be >= repetitions (" +
-         std::to_string(policy.repeat) + ")");
+    fail("maximum repetitions (" + std::to_string(policy.max_repeat) +
+         ") must be >= repetitions (" + std::to_string(policy.repeat) + ")");
   }
 }
 
@@ -154,7 +157,8 @@ StopReason parse_stop_reason(std::string_view text) {
                    "' (expected fixed_count, target_reached, time_budget or max_repeat)");
 }
 
-RepetitionOutcome repeat_measurement(const RepetitionPolicy& policy, const std::function<void()>& warm_up,
+RepetitionOutcome repeat_measurement(const RepetitionPolicy& policy,
+                                     const std::function<void()>& warm_up,
                                      const std::function<double()>& sample) {
   validate(policy);
   RepetitionOutcome outcome;

@@ -42,12 +42,14 @@ std::vector<std::string> scene_arguments(const ExperimentScene& scene) {
     if (s.blob_radius != SceneSpec{}.blob_radius) {
       throw InputError("cache simulation: scenes with a non-default blob_radius are not supported");
     }
-    args = {"--scene",  std::string(to_string(s.kind)),  "--n",          std::to_string(s.n),
-            "--seed",   std::to_string(s.seed),          "--core",       fmt::format("{}", s.core),
-            "--background", fmt::format("{}", s.background), "--blobs", std::to_string(s.blob_count),
-            "--size-ratio", fmt::format("{}", s.size_ratio)};
+    args = {
+        "--scene",      std::string(to_string(s.kind)),  "--n",     std::to_string(s.n),
+        "--seed",       std::to_string(s.seed),          "--core",  fmt::format("{}", s.core),
+        "--background", fmt::format("{}", s.background), "--blobs", std::to_string(s.blob_count),
+        "--size-ratio", fmt::format("{}", s.size_ratio)};
   }
-  if (scene.diameter > 0.0) args.insert(args.end(), {"--diameter", fmt::format("{}", scene.diameter)});
+  if (scene.diameter > 0.0)
+    args.insert(args.end(), {"--diameter", fmt::format("{}", scene.diameter)});
   return args;
 }
 
@@ -167,9 +169,11 @@ SweepSummary run_sweep(const Experiment& experiment, const SweepOptions& options
         request.geometry = *geometry;
         request.executable = fs::read_symlink("/proc/self/exe").string();
         request.arguments = {"detect"};
-        for (auto& a : scene_arguments(experiment.scenes[point.scene])) request.arguments.push_back(std::move(a));
-        request.arguments.insert(request.arguments.end(), {"--variant", to_string(point.variant), "--threads",
-                                                           std::to_string(point.threads), "--cache-sim-child"});
+        for (auto& a : scene_arguments(experiment.scenes[point.scene]))
+          request.arguments.push_back(std::move(a));
+        request.arguments.insert(request.arguments.end(),
+                                 {"--variant", to_string(point.variant), "--threads",
+                                  std::to_string(point.threads), "--cache-sim-child"});
         request.threads = point.threads;
         run.counters.push_back(simulate_caches(request));
       }

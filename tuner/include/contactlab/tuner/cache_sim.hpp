@@ -51,8 +51,8 @@ struct CacheSimRequest {
   CacheGeometry geometry;
   std::string executable;              // the program to simulate
   std::vector<std::string> arguments;  // its arguments (without argv[0])
-  std::string valgrind;  // empty: $CONTACTLAB_VALGRIND, else `valgrind` on PATH
-  int threads = 1;       // recorded: threads of the simulated run
+  std::string valgrind;                // empty: $CONTACTLAB_VALGRIND, else `valgrind` on PATH
+  int threads = 1;                     // recorded: threads of the simulated run
 };
 
 // Runs the simulation. Never throws for a missing valgrind, a failing child or an unreadable

@@ -47,10 +47,10 @@ struct BuildRecord {
 BuildRecord build_record();
 
 struct OpenMpInfo {
-  int threads = 0;      // threads the runs use
-  int max_threads = 0;  // omp_get_max_threads()
-  int num_procs = 0;    // omp_get_num_procs()
-  int version = 0;      // _OPENMP
+  int threads = 0;        // threads the runs use
+  int max_threads = 0;    // omp_get_max_threads()
+  int num_procs = 0;      // omp_get_num_procs()
+  int version = 0;        // _OPENMP
   std::string proc_bind;  // omp_get_proc_bind(): false, true, primary, close, spread
   int places = 0;         // omp_get_num_places()
   bool dynamic = false;

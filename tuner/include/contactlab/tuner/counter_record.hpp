@@ -53,7 +53,7 @@ struct CounterRecord {
   std::optional<double> l2_miss_percent;
   std::string l1_formula;  // e.g. "100 * PAPI_L1_DCM / PAPI_LST_INS"; empty without a rate
   std::string l2_formula;
-  std::string region;      // what was counted, e.g. "detection loop, every thread"
+  std::string region;  // what was counted, e.g. "detection loop, every thread"
   int counted_runs = 0;
   std::vector<EventCount> events;
   std::optional<SimulationRecord> simulation;  // set exactly for simulated sources

@@ -84,7 +84,8 @@ inline void read(const JsonIn& in, std::uint64_t& out) {
 inline void read(const JsonIn& in, std::uint32_t& out) {
   std::uint64_t v = 0;
   read(in, v);
-  if (v > std::numeric_limits<std::uint32_t>::max()) in.fail("value " + std::to_string(v) + " too large");
+  if (v > std::numeric_limits<std::uint32_t>::max())
+    in.fail("value " + std::to_string(v) + " too large");
   out = static_cast<std::uint32_t>(v);
 }
 inline void read(const JsonIn& in, int& out) {
@@ -118,7 +119,8 @@ template <class T, std::size_t N>
 void read(const JsonIn& in, std::array<T, N>& out) {
   if (!in.value().is_array()) in.wrong_type("array");
   if (in.value().size() != N) {
-    in.fail("expected " + std::to_string(N) + " elements, got " + std::to_string(in.value().size()));
+    in.fail("expected " + std::to_string(N) + " elements, got " +
+            std::to_string(in.value().size()));
   }
   for (std::size_t i = 0; i < N; ++i) {
     read(JsonIn(in.value()[i], in.path() + "[" + std::to_string(i) + "]"), out[i]);

@@ -26,8 +26,9 @@ struct MeasureOptions {
 // Runs the measurement with `detector` (its buffers persist, so repetitions time the work and
 // not the allocator). The convergence test of adaptive repetition is on T_ALL = T_s + T_c.
 // Throws InputError for invalid options or scene (nothing is measured then).
-RunRecord measure_detection(ContactDetector& detector, const Scene& scene, const SceneRecord& scene_record,
-                            const DetectOptions& options, const MeasureOptions& measure);
+RunRecord measure_detection(ContactDetector& detector, const Scene& scene,
+                            const SceneRecord& scene_record, const DetectOptions& options,
+                            const MeasureOptions& measure);
 
 // The record of a run that could not be made: status failed, the message, no aggregates.
 RunRecord failed_run(RunParameters parameters, std::string message);

@@ -20,7 +20,7 @@ namespace contactlab::tuner {
 struct PapiFormula {
   std::vector<std::string> numerator;
   std::vector<std::string> denominator;
-  std::string basis;  // "load/store instructions", "accesses", "loads"
+  std::string basis;         // "load/store instructions", "accesses", "loads"
   std::string text() const;  // "100 * PAPI_L1_DCM / PAPI_LST_INS"
 };
 const std::vector<PapiFormula>& papi_l1_formulas();
@@ -39,9 +39,9 @@ struct PapiInfo {
   std::string version;  // of the library in use
   std::string error;    // why initialisation failed
   int hardware_counters = 0;
-  std::vector<std::string> components;      // active components
-  std::vector<std::string> presets_listed;  // presets PAPI lists as available (may still fail)
-  std::vector<PapiEventProbe> cache_events; // every event of the miss-rate formulas, tried
+  std::vector<std::string> components;       // active components
+  std::vector<std::string> presets_listed;   // presets PAPI lists as available (may still fail)
+  std::vector<PapiEventProbe> cache_events;  // every event of the miss-rate formulas, tried
 };
 const PapiInfo& papi_info();
 

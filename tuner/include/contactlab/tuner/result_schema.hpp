@@ -32,11 +32,11 @@ RunStatus parse_run_status(std::string_view text);  // throws InputError
 
 // Where the particles came from: a generator and its parameters, or a file.
 struct SceneRecord {
-  std::string kind;                  // uniform, clustered, blobs, polydisperse, file
-  std::optional<std::string> path;   // file scenes
+  std::string kind;                 // uniform, clustered, blobs, polydisperse, file
+  std::optional<std::string> path;  // file scenes
   std::uint64_t n = 0;
-  std::optional<double> diameter;    // null when the particles carry their own diameters
-  std::optional<std::uint64_t> seed; // generated scenes
+  std::optional<double> diameter;     // null when the particles carry their own diameters
+  std::optional<std::uint64_t> seed;  // generated scenes
   std::optional<double> core, background, blob_radius, size_ratio;
   std::optional<int> blob_count;
   std::array<double, 6> box{};  // xmin, ymin, zmin, xmax, ymax, zmax
@@ -54,9 +54,9 @@ struct RunParameters {
 
 // Raw values, one entry per timed repetition (warm-up runs are not kept).
 struct RunSamples {
-  std::vector<double> setup_s;   // T_s
-  std::vector<double> detect_s;  // T_c
-  std::vector<double> total_s;   // T_s + T_c
+  std::vector<double> setup_s;                     // T_s
+  std::vector<double> detect_s;                    // T_c
+  std::vector<double> total_s;                     // T_s + T_c
   std::vector<std::vector<double>> thread_busy_s;  // [repetition][thread], detection loop
   std::vector<double> imbalance;                   // (t_max - t_mean) / t_max per repetition
 };
@@ -90,9 +90,9 @@ struct RunRecord {
   std::string message;  // empty when ok
   RunParameters parameters;
   RunSamples samples;
-  std::optional<RunAggregates> aggregates;  // null when failed
-  std::optional<RunWork> work;              // null when failed
-  std::vector<CounterRecord> counters;      // each with its source; empty when none requested
+  std::optional<RunAggregates> aggregates;    // null when failed
+  std::optional<RunWork> work;                // null when failed
+  std::vector<CounterRecord> counters;        // each with its source; empty when none requested
   std::optional<ContactCheck> contact_check;  // null when not checked
 };
 

@@ -84,7 +84,8 @@ struct RepetitionOutcome {
 
 // Calls warm_up() policy.warmup times, then sample() until the policy says stop. sample()
 // returns the value whose median must converge (the caller keeps everything else it measures).
-RepetitionOutcome repeat_measurement(const RepetitionPolicy& policy, const std::function<void()>& warm_up,
+RepetitionOutcome repeat_measurement(const RepetitionPolicy& policy,
+                                     const std::function<void()>& warm_up,
                                      const std::function<double()>& sample);
 
 }  // namespace contactlab::tuner
