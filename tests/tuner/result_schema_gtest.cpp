@@ -134,8 +134,7 @@ TEST(ResultSchema, RejectsWrongTypesWithThePath) {
   EXPECT_EQ(rejection(j), "$.runs[0].samples.setup_s[2]: expected number, got string");
   j = sample_json();
   j["runs"][0]["work"]["contact_pairs"] = -3;
-  EXPECT_EQ(rejection(j),
-            "$.runs[0].work.contact_pairs: expected non-negative integer, got number");
+  EXPECT_EQ(rejection(j), "$.runs[0].work.contact_pairs: expected non-negative integer, got -3");
   j = sample_json();
   j["runs"][0]["parameters"]["threads"] = 2.5;
   EXPECT_EQ(rejection(j), "$.runs[0].parameters.threads: expected integer, got number");

@@ -4,131 +4,98 @@
 #include <cmath>
 #include <fstream>
 #include <nlohmann/json.hpp>
-#include <set>
+#include <optional>
 
 #include "contactlab/kernels/error.hpp"
 #include "contactlab/kernels/rng.hpp"
+#include "contactlab/tuner/json_reader.hpp"
 
 namespace contactlab::tuner {
 namespace {
 
 using nlohmann::json;
 
-// Reads an object field by field; anything left unread at the end is an unknown key.
-class ObjectReader {
- public:
-  ObjectReader(const json& object, std::string path, const std::string& source)
-      : object_(object), path_(std::move(path)), source_(source) {
-    if (!object.is_object()) fail(path_, "expected an object");
+// A field of a config: required when no fallback is given; numbers checked against a range.
+template <class T>
+T number(ObjectIn& object, const std::string& key, std::optional<T> fallback, T low, T high) {
+  const std::optional<JsonIn> in = fallback ? object.optional_field(key) : object.field(key);
+  if (!in) return *fallback;
+  T value{};
+  read(*in, value);
+  if (value < low || value > high) {
+    in->fail("must be in [" + json(low).dump() + ", " + json(high).dump() + "], got " +
+             in->value().dump());
   }
+  return value;
+}
 
-  [[noreturn]] void fail(const std::string& path, const std::string& problem) const {
-    throw InputError(source_ + ": " + path + ": " + problem);
-  }
-  std::string path_of(const std::string& key) const { return path_ + "." + key; }
+std::string text(ObjectIn& object, const std::string& key, std::optional<std::string> fallback) {
+  const std::optional<JsonIn> in = fallback ? object.optional_field(key) : object.field(key);
+  if (!in) return *fallback;
+  std::string value;
+  read(*in, value);
+  return value;
+}
 
-  const json* find(const std::string& key) {
-    seen_.insert(key);
-    const auto it = object_.find(key);
-    return it == object_.end() ? nullptr : &*it;
-  }
-  const json& require(const std::string& key) {
-    const json* value = find(key);
-    if (!value) fail(path_of(key), "missing");
-    return *value;
-  }
+bool flag(ObjectIn& object, const std::string& key, bool fallback) {
+  const std::optional<JsonIn> in = object.optional_field(key);
+  bool value = fallback;
+  if (in) read(*in, value);
+  return value;
+}
 
-  template <class T>
-  T number(const std::string& key, T fallback, T low, T high, bool required = false) {
-    const json* value = required ? &require(key) : find(key);
-    if (!value) return fallback;
-    if (!value->is_number()) fail(path_of(key), "expected a number");
-    if constexpr (std::is_integral_v<T>) {
-      if (!value->is_number_integer()) fail(path_of(key), "expected an integer");
-    }
-    const double as_double = value->get<double>();
-    if (!std::isfinite(as_double) || as_double < double(low) || as_double > double(high)) {
-      fail(path_of(key), "must be in [" + json(low).dump() + ", " + json(high).dump() + "], got " +
-                             value->dump());
-    }
-    return value->get<T>();
-  }
-  std::string text(const std::string& key, const std::string& fallback, bool required = false) {
-    const json* value = required ? &require(key) : find(key);
-    if (!value) return fallback;
-    if (!value->is_string()) fail(path_of(key), "expected a string");
-    return value->get<std::string>();
-  }
-  bool flag(const std::string& key, bool fallback) {
-    const json* value = find(key);
-    if (!value) return fallback;
-    if (!value->is_boolean()) fail(path_of(key), "expected true or false");
-    return value->get<bool>();
-  }
-
-  void finish() const {
-    for (auto it = object_.begin(); it != object_.end(); ++it) {
-      if (!seen_.count(it.key())) fail(path_of(it.key()), "unknown key");
-    }
-  }
-
- private:
-  const json& object_;
-  std::string path_;
-  const std::string& source_;
-  std::set<std::string> seen_;
-};
-
-ExperimentScene parse_scene(const json& value, const std::string& path, const std::string& source) {
-  ObjectReader reader(value, path, source);
+ExperimentScene parse_scene(const JsonIn& in) {
+  ObjectIn o(in);
   ExperimentScene scene;
-  scene.file = reader.text("file", "");
-  scene.diameter = reader.number<double>("diameter", 0.0, 1e-300, 1e300, scene.file.empty());
+  scene.file = text(o, "file", "");
+  scene.diameter = number<double>(
+      o, "diameter", scene.file.empty() ? std::nullopt : std::optional(0.0), 1e-300, 1e300);
   scene.spec.diameter = scene.diameter;
   if (scene.file.empty()) {
-    const std::string kind = reader.text("kind", "", true);
+    const JsonIn kind = o.field("kind");
     try {
-      scene.spec.kind = parse_scene_kind(kind);
+      std::string name;
+      read(kind, name);
+      scene.spec.kind = parse_scene_kind(name);
+    } catch (const SchemaError&) {
+      throw;
     } catch (const InputError& e) {
-      reader.fail(reader.path_of("kind"), e.what());
+      kind.fail(e.what());
     }
-    scene.spec.n = reader.number<std::uint64_t>("n", 0, 0, UINT32_MAX - 1, true);
-    scene.spec.seed = reader.number<std::uint64_t>("seed", 1, 0, UINT64_MAX);
-    scene.spec.core = reader.number<double>("core", scene.spec.core, 1e-6, 100.0);
-    scene.spec.background = reader.number<double>("background", scene.spec.background, 0.0, 1.0);
-    scene.spec.blob_count = reader.number<int>("blobs", scene.spec.blob_count, 1, 1'000'000);
-    scene.spec.blob_radius =
-        reader.number<double>("blob_radius", scene.spec.blob_radius, 1e-6, 0.5);
-    scene.spec.size_ratio = reader.number<double>("size_ratio", scene.spec.size_ratio, 1.0, 1e6);
+    SceneSpec& spec = scene.spec;
+    spec.n = number<std::uint64_t>(o, "n", std::nullopt, 0, UINT32_MAX - 1);
+    spec.seed = number<std::uint64_t>(o, "seed", spec.seed, 0, UINT64_MAX);
+    spec.core = number<double>(o, "core", spec.core, 1e-6, 100.0);
+    spec.background = number<double>(o, "background", spec.background, 0.0, 1.0);
+    spec.blob_count = number<int>(o, "blobs", spec.blob_count, 1, 1'000'000);
+    spec.blob_radius = number<double>(o, "blob_radius", spec.blob_radius, 1e-6, 0.5);
+    spec.size_ratio = number<double>(o, "size_ratio", spec.size_ratio, 1.0, 1e6);
   }
-  scene.name = reader.text("name", scene.file.empty() ? std::string(to_string(scene.spec.kind)) +
-                                                            "-" + std::to_string(scene.spec.n)
-                                                      : scene.file);
-  reader.finish();
+  scene.name = text(o, "name",
+                    scene.file.empty() ? std::string(to_string(scene.spec.kind)) + "-" +
+                                             std::to_string(scene.spec.n)
+                                       : scene.file);
+  o.finish();
   return scene;
 }
 
-std::vector<int> parse_chunks(const json& value, const std::string& path,
-                              const std::string& source) {
-  if (value.is_array()) {
-    std::vector<int> chunks;
-    for (std::size_t i = 0; i < value.size(); ++i) {
-      const json& k = value[i];
-      if (!k.is_number_integer() || k.get<long long>() < 1 || k.get<long long>() > 1'000'000'000) {
-        throw InputError(source + ": " + path + "[" + std::to_string(i) +
-                         "]: chunk sizes must be integers >= 1");
-      }
-      chunks.push_back(k.get<int>());
+std::vector<int> parse_chunks(const JsonIn& in) {
+  std::vector<int> chunks;
+  if (in.value().is_array()) {
+    read(in, chunks);
+    for (std::size_t i = 0; i < chunks.size(); ++i) {
+      if (chunks[i] < 1)
+        JsonIn(in.value()[i], in.path() + "[" + std::to_string(i) + "]")
+            .fail("chunk sizes must be >= 1");
     }
     return chunks;
   }
-  ObjectReader reader(value, path, source);
-  const int from = reader.number<int>("from", 1, 1, 1'000'000'000, true);
-  const int to = reader.number<int>("to", 1, 1, 1'000'000'000, true);
-  const int factor = reader.number<int>("factor", 2, 2, 1024);
-  reader.finish();
-  if (to < from) reader.fail(path, "'to' must be >= 'from'");
-  std::vector<int> chunks;
+  ObjectIn o(in);
+  const int from = number<int>(o, "from", std::nullopt, 1, 1'000'000'000);
+  const int to = number<int>(o, "to", std::nullopt, 1, 1'000'000'000);
+  const int factor = number<int>(o, "factor", 2, 2, 1024);
+  o.finish();
+  if (to < from) in.fail("'to' must be >= 'from'");
   for (long long k = from; k <= to; k *= factor) chunks.push_back(static_cast<int>(k));
   return chunks;
 }
@@ -182,85 +149,94 @@ std::vector<ExperimentPoint> experiment_points(const Experiment& experiment) {
   return points;
 }
 
-Experiment parse_experiment(const json& document, const std::string& source) {
-  ObjectReader reader(document, "$", source);
-  const int version = reader.number<int>("schema_version", 0, 0, 1'000'000, true);
+namespace {
+
+Experiment parse_experiment_document(const JsonIn& root) {
+  ObjectIn o(root);
+  const JsonIn version_in = o.field("schema_version");
+  int version = 0;
+  read(version_in, version);
   if (version != kExperimentSchemaVersion) {
-    reader.fail("$.schema_version", "version " + std::to_string(version) +
-                                        " is not supported (expected " +
-                                        std::to_string(kExperimentSchemaVersion) + ")");
+    version_in.fail("version " + std::to_string(version) + " is not supported (expected " +
+                    std::to_string(kExperimentSchemaVersion) + ")");
   }
   Experiment experiment;
-  experiment.name = reader.text("name", "", true);
-  experiment.description = reader.text("description", "");
+  experiment.name = text(o, "name", std::nullopt);
+  experiment.description = text(o, "description", "");
 
-  const json& scenes = reader.require("scenes");
-  if (!scenes.is_array() || scenes.empty()) reader.fail("$.scenes", "expected a non-empty array");
-  for (std::size_t i = 0; i < scenes.size(); ++i) {
+  const JsonIn scenes = o.field("scenes");
+  if (!scenes.value().is_array() || scenes.value().empty())
+    scenes.fail("expected a non-empty array");
+  for (std::size_t i = 0; i < scenes.value().size(); ++i) {
     experiment.scenes.push_back(
-        parse_scene(scenes[i], "$.scenes[" + std::to_string(i) + "]", source));
+        parse_scene(JsonIn(scenes.value()[i], scenes.path() + "[" + std::to_string(i) + "]")));
   }
 
-  if (const json* chunks = reader.find("chunks"))
-    experiment.chunks = parse_chunks(*chunks, "$.chunks", source);
-  const json& variants = reader.require("variants");
-  if (!variants.is_array() || variants.empty())
-    reader.fail("$.variants", "expected a non-empty array");
-  for (std::size_t i = 0; i < variants.size(); ++i) {
-    const std::string path = "$.variants[" + std::to_string(i) + "]";
-    if (!variants[i].is_string()) reader.fail(path, "expected a variant string");
-    const std::string pattern = variants[i].get<std::string>();
-    if (pattern.find("{k}") != std::string::npos && experiment.chunks.empty()) {
-      reader.fail(path, "uses {k} but $.chunks is missing");
+  if (const auto chunks = o.optional_field("chunks")) experiment.chunks = parse_chunks(*chunks);
+  const JsonIn variants = o.field("variants");
+  if (!variants.value().is_array() || variants.value().empty())
+    variants.fail("expected a non-empty array");
+  read(variants, experiment.variant_patterns);
+  for (std::size_t i = 0; i < experiment.variant_patterns.size(); ++i) {
+    const JsonIn at(variants.value()[i], variants.path() + "[" + std::to_string(i) + "]");
+    std::string probe = experiment.variant_patterns[i];
+    if (const auto k = probe.find("{k}"); k != std::string::npos) {
+      if (experiment.chunks.empty()) at.fail("uses {k} but $.chunks is missing");
+      probe.replace(k, 3, "1");
     }
     try {
-      std::string probe = pattern;
-      if (const auto at = probe.find("{k}"); at != std::string::npos) probe.replace(at, 3, "1");
       parse_variant(probe);
     } catch (const InputError& e) {
-      reader.fail(path, e.what());
+      at.fail(e.what());
     }
-    experiment.variant_patterns.push_back(pattern);
   }
 
-  const json& threads = reader.require("threads");
-  if (!threads.is_array() || threads.empty())
-    reader.fail("$.threads", "expected a non-empty array");
-  for (std::size_t i = 0; i < threads.size(); ++i) {
-    if (!threads[i].is_number_integer() || threads[i].get<long long>() < 1 ||
-        threads[i].get<long long>() > 4096) {
-      reader.fail("$.threads[" + std::to_string(i) + "]",
-                  "thread counts must be integers in [1, 4096]");
+  const JsonIn threads = o.field("threads");
+  read(threads, experiment.threads);
+  if (experiment.threads.empty()) threads.fail("expected a non-empty array");
+  for (std::size_t i = 0; i < experiment.threads.size(); ++i) {
+    if (experiment.threads[i] < 1 || experiment.threads[i] > 4096) {
+      JsonIn(threads.value()[i], threads.path() + "[" + std::to_string(i) + "]")
+          .fail("thread counts must be in [1, 4096]");
     }
-    experiment.threads.push_back(threads[i].get<int>());
   }
 
-  if (const json* repetitions = reader.find("repetitions")) {
-    ObjectReader r(*repetitions, "$.repetitions", source);
-    auto& reps = experiment.repetitions;
-    reps.warmup = r.number<int>("warmup", reps.warmup, 0, 1000);
-    reps.repeat = r.number<int>("min", reps.repeat, 1, 100000);
-    reps.max_repeat = r.number<int>("max", reps.repeat, reps.repeat, 100000);
-    const double target = r.number<double>("target_ci", 0.0, 0.0, 1.0);
+  if (const auto repetitions = o.optional_field("repetitions")) {
+    ObjectIn r(*repetitions);
+    RepetitionPolicy& reps = experiment.repetitions;
+    reps.warmup = number<int>(r, "warmup", reps.warmup, 0, 1000);
+    reps.repeat = number<int>(r, "min", reps.repeat, 1, 100000);
+    reps.max_repeat = number<int>(r, "max", reps.repeat, reps.repeat, 100000);
+    const double target = number<double>(r, "target_ci", 0.0, 0.0, 1.0);
     reps.adaptive = target > 0.0;
     if (reps.adaptive) reps.target_relative_half_width = target;
-    reps.time_budget_s = r.number<double>("budget_s", reps.time_budget_s, 0.0, 1e6);
+    reps.time_budget_s = number<double>(r, "budget_s", reps.time_budget_s, 0.0, 1e6);
     r.finish();
   }
-  if (const json* measurements = reader.find("measurements")) {
-    ObjectReader m(*measurements, "$.measurements", source);
-    experiment.papi = m.flag("papi", false);
-    experiment.cache_sim = m.text("cache_sim", "");
+  if (const auto measurements = o.optional_field("measurements")) {
+    ObjectIn m(*measurements);
+    experiment.papi = flag(m, "papi", false);
+    experiment.cache_sim = text(m, "cache_sim", "");
     if (!experiment.cache_sim.empty() && experiment.cache_sim != "host" &&
         experiment.cache_sim != "fx10") {
-      m.fail("$.measurements.cache_sim", "expected \"host\" or \"fx10\"");
+      m.field("cache_sim").fail("expected \"host\" or \"fx10\"");
     }
-    experiment.check_contacts = m.flag("check_contacts", true);
+    experiment.check_contacts = flag(m, "check_contacts", true);
     m.finish();
   }
-  experiment.order_seed = reader.number<std::uint64_t>("order_seed", 1, 0, UINT64_MAX);
-  reader.finish();
+  experiment.order_seed = number<std::uint64_t>(o, "order_seed", 1, 0, UINT64_MAX);
+  o.finish();
   return experiment;
+}
+
+}  // namespace
+
+Experiment parse_experiment(const json& document, const std::string& source) {
+  try {
+    return parse_experiment_document(JsonIn(document, "$"));
+  } catch (const SchemaError& e) {
+    throw InputError(source + ": " + e.what());
+  }
 }
 
 Experiment read_experiment(const std::string& path) {

@@ -49,6 +49,11 @@ class ObjectIn {
     seen_.insert(key);
     return JsonIn(*it, in_.path() + "." + key);
   }
+  // For configs, whose fields may be left out: the field, or nothing when it is absent.
+  std::optional<JsonIn> optional_field(const std::string& key) {
+    if (!in_.value().contains(key)) return std::nullopt;
+    return field(key);
+  }
   template <class T>
   void operator()(const std::string& key, T& out) {
     read(field(key), out);
@@ -78,7 +83,10 @@ inline void read(const JsonIn& in, std::string& out) {
   out = in.value().get<std::string>();
 }
 inline void read(const JsonIn& in, std::uint64_t& out) {
-  if (!in.value().is_number_unsigned()) in.wrong_type("non-negative integer");
+  // JSON built in code holds small integers as signed: accept those that are >= 0.
+  const bool non_negative = in.value().is_number_unsigned() ||
+                            (in.value().is_number_integer() && in.value().get<std::int64_t>() >= 0);
+  if (!non_negative) in.fail("expected non-negative integer, got " + in.value().dump());
   out = in.value().get<std::uint64_t>();
 }
 inline void read(const JsonIn& in, std::uint32_t& out) {
