@@ -57,6 +57,12 @@ struct NeighbourRanges {
   int own = 0;
   std::uint64_t candidates = 0;  // slots in all ranges, the home particle's own included
 
+  // Pair tests of the home particle in slot s_h: with the half stencil only the own range's
+  // later slots, with the full one every slot but its own.
+  std::uint64_t tests_from(std::uint32_t s_h, bool half) const {
+    return candidates - (half ? s_h + 1 - ranges[own].begin : 1);
+  }
+
   void build(const CellGrid& grid, const CellRegistry& registry, const StencilRows& stencil,
              const std::array<int, 3>& home) {
     count = 0;
@@ -227,9 +233,7 @@ void ContactDetector::detect(const CellGrid& grid, const Layout& layout,
           layout, nb, h, s_h, reach_sq, out);
       found_count_[h] = static_cast<std::uint32_t>(out.size() - before);
       homes.push_back(h);
-      // Own range: with the half stencil only later slots; with the full one all but oneself.
-      const SlotRange own = nb.ranges[nb.own];
-      tests += nb.candidates - (decltype(half_tag)::value ? (s_h + 1 - own.begin) : 1);
+      tests += nb.tests_from(s_h, decltype(half_tag)::value);
     };
 
     if (options.observer) options.observer->thread_begin(tid);
@@ -410,8 +414,7 @@ std::vector<std::uint32_t> ContactDetector::iteration_work(const Scene& scene,
   };
   NeighbourRanges nb;
   auto tests_of = [&](std::uint32_t s_h) {
-    const SlotRange own = nb.ranges[nb.own];
-    return static_cast<std::uint32_t>(nb.candidates - (half ? (s_h + 1 - own.begin) : 1));
+    return static_cast<std::uint32_t>(nb.tests_from(s_h, half));
   };
   std::vector<std::uint32_t> work;
   const std::uint32_t n = static_cast<std::uint32_t>(scene.size());
