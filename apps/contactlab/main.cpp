@@ -361,6 +361,9 @@ struct TuneCommand {
   std::uint64_t tolerance = 0;
   int max_chunk = 65536;
   std::string orders = "sorted,morton";
+  int search_samples = tn::TuneOptions{}.search_samples;
+  int exhaustive_rounds = tn::TuneOptions{}.exhaustive_rounds;
+  int verify_rounds = tn::TuneOptions{}.verify_rounds;
 };
 
 int command_tune(const SceneOptions& scene_options, const TuneCommand& command,
@@ -373,6 +376,9 @@ int command_tune(const SceneOptions& scene_options, const TuneCommand& command,
   options.predict_only = command.predict_only;
   options.exhaustive = command.exhaustive;
   options.tolerance = command.tolerance;
+  options.search_samples = command.search_samples;
+  options.exhaustive_rounds = command.exhaustive_rounds;
+  options.verify_rounds = command.verify_rounds;
   if (command.tolerance > 0) options.precisions.push_back(cl::Precision::kFloat);
   options.chunk_grid = tn::log2_chunk_grid(command.max_chunk);
   options.orders.clear();
@@ -388,11 +394,13 @@ int command_tune(const SceneOptions& scene_options, const TuneCommand& command,
   for (const auto& method : report.json["methods"]) {
     std::string measured = "not measured";
     if (method.contains("measured")) {
-      measured = fmt::format("measured T_c {:.4f} s [{:.4f}, {:.4f}]  regret {:+.1f}%",
+      measured = fmt::format("measured T_c {:.4f} s [{:.4f}, {:.4f}]  regret {:+.1f}% [{:+.1f}, {:+.1f}]",
                              method["measured"]["median_s"].get<double>(),
                              method["measured"]["ci95_low_s"].get<double>(),
                              method["measured"]["ci95_high_s"].get<double>(),
-                             100.0 * method["regret"].get<double>());
+                             100.0 * method["regret"].get<double>(),
+                             100.0 * method["regret_ci95"][0].get<double>(),
+                             100.0 * method["regret_ci95"][1].get<double>());
     }
     fmt::print("{:<11} {:<40} cost {:7.2f} s  {}\n", method["method"].get<std::string>(),
                method["variant"].get<std::string>(), method["tuning_cost_s"].get<double>(),
@@ -559,6 +567,15 @@ int main(int argc, char** argv) {
                    "wrong contact pairs allowed (single precision)");
   tune->add_option("--max-chunk", tune_command.max_chunk, "largest chunk of the grid 1, 2, 4, ...");
   tune->add_option("--orders", tune_command.orders, "orders to screen, comma-separated");
+  tune->add_option("--search-samples", tune_command.search_samples,
+                   "timed runs per chunk the search evaluates")
+      ->check(CLI::PositiveNumber);
+  tune->add_option("--exhaustive-rounds", tune_command.exhaustive_rounds,
+                   "rounds over the chunk grid in the exhaustive sweep (one run per chunk each)")
+      ->check(CLI::PositiveNumber);
+  tune->add_option("--verify-rounds", tune_command.verify_rounds,
+                   "rounds of the final verification (every choice timed once per round)")
+      ->check(CLI::PositiveNumber);
 
   SceneOptions demo_scene;
   int demo_repeat = 3;

@@ -1,8 +1,9 @@
-// The median interval, and the chunk search on synthetic noisy cost functions of log2 k with
+// The chunk search on synthetic noisy cost functions of log2 k with
 // a fixed-seed generator: it finds the known optimum with far fewer evaluations than the
 // exhaustive sweep, prefers the larger chunk among ties, and honours its budget.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdint>
@@ -16,55 +17,6 @@
 
 namespace contactlab::tuner {
 namespace {
-
-TEST(SampleMedian, OddAndEvenCounts) {
-  EXPECT_DOUBLE_EQ(sample_median(std::vector<double>{3, 1, 2}), 2.0);
-  EXPECT_DOUBLE_EQ(sample_median(std::vector<double>{4, 1, 3, 2}), 2.5);
-  EXPECT_THROW(sample_median(std::vector<double>{}), std::invalid_argument);
-}
-
-TEST(MedianConfidenceInterval, UsesBinomialOrderStatistics) {
-  // n = 10: P(B <= 0) = 1/1024, P(B <= 1) = 11/1024, P(B <= 2) = 56/1024.
-  // l = 2: coverage 1 - 22/1024 = 0.9785 >= 0.95; l = 3: 1 - 112/1024 = 0.89 < 0.95.
-  const std::vector<double> ten = {10, 9, 8, 7, 6, 5, 4, 3, 2, 1};
-  const MedianConfidenceInterval interval = median_confidence_interval(ten);
-  EXPECT_EQ(interval.low_rank, 2u);
-  EXPECT_EQ(interval.high_rank, 9u);
-  EXPECT_DOUBLE_EQ(interval.low_seconds, 2.0);
-  EXPECT_DOUBLE_EQ(interval.high_seconds, 9.0);
-  EXPECT_DOUBLE_EQ(interval.median_seconds, 5.5);
-  EXPECT_NEAR(interval.coverage, 1.0 - 22.0 / 1024.0, 1e-12);
-  // At 80% the interval narrows to l = 3 (coverage 0.89).
-  EXPECT_EQ(median_confidence_interval(ten, 0.8).low_rank, 3u);
-}
-
-TEST(MedianConfidenceInterval, SmallSamplesFallBackToTheRangeWithTheirTrueCoverage) {
-  // n = 5: [min, max] covers with 1 - 2/32 = 0.9375 < 0.95; n = 6: 1 - 2/64 = 0.96875.
-  const MedianConfidenceInterval five =
-      median_confidence_interval(std::vector<double>{1, 2, 3, 4, 5});
-  EXPECT_EQ(five.low_rank, 1u);
-  EXPECT_EQ(five.high_rank, 5u);
-  EXPECT_NEAR(five.coverage, 0.9375, 1e-12);
-  EXPECT_NEAR(median_confidence_interval(std::vector<double>{1, 2, 3, 4, 5, 6}).coverage, 0.96875,
-              1e-12);
-  const MedianConfidenceInterval one = median_confidence_interval(std::vector<double>{7});
-  EXPECT_DOUBLE_EQ(one.low_seconds, 7.0);
-  EXPECT_DOUBLE_EQ(one.high_seconds, 7.0);
-  EXPECT_DOUBLE_EQ(one.coverage, 0.0);
-  EXPECT_THROW(median_confidence_interval(std::vector<double>{}), std::invalid_argument);
-  EXPECT_THROW(median_confidence_interval(std::vector<double>{1}, 1.0), std::invalid_argument);
-}
-
-TEST(MedianConfidenceInterval, LargeSamplesDoNotUnderflow) {
-  std::vector<double> samples(2000);
-  for (std::size_t i = 0; i < samples.size(); ++i) samples[i] = static_cast<double>(i);
-  const MedianConfidenceInterval interval = median_confidence_interval(samples);
-  EXPECT_GE(interval.coverage, 0.95);
-  EXPECT_LT(interval.coverage, 0.96);
-  // Normal approximation: n/2 -+ 1.96 sqrt(n)/2 = 1000 -+ 43.8.
-  EXPECT_NEAR(static_cast<double>(interval.low_rank), 956.0, 2.0);
-  EXPECT_EQ(interval.low_rank + interval.high_rank, 2001u);
-}
 
 // Gaussian-like noise from a fixed-seed generator: the sum of 12 uniforms minus 6 has mean 0
 // and variance 1 (Irwin-Hall).
@@ -159,6 +111,44 @@ TEST(SearchChunk, PrefersTheLargestChunkAmongTies) {
   EXPECT_EQ(exhaustive.chosen_chunk, 4096);
   EXPECT_LT(search.evaluations, exhaustive.evaluations);
   EXPECT_LT(std::abs(regret(exhaustive, search.chosen_chunk)), 0.02);
+}
+
+TEST(SearchChunk, NoisyOverlapAloneDoesNotPickASlowerLargerChunk) {
+  // 30% spread and three samples a call: every interval overlaps every other. The rising side
+  // above k = 256 is 5%, 20%, ... slower; the equivalence margin (2%) keeps the search from
+  // taking the largest overlapping chunk, as the overlap test alone would.
+  MeasureChunk wide = [&](int chunk) {
+    const double truth = convex(std::log2(static_cast<double>(chunk)));
+    return std::vector<double>{0.7 * truth, truth, 1.3 * truth};
+  };
+  ChunkSearchOptions options;
+  options.seed_chunk = 256;
+  EXPECT_EQ(search_chunk(wide, options).chosen_chunk, 256);
+  options.equivalence_margin = 0.06;  // a looser margin admits the 5% slower neighbour
+  EXPECT_EQ(search_chunk(wide, options).chosen_chunk, 512);
+}
+
+TEST(ExhaustiveSweep, RoundsVisitEveryChunkOncePerRoundInShuffledOrder) {
+  std::vector<int> visits;
+  MeasureChunk record = [&](int chunk) {
+    visits.push_back(chunk);
+    return std::vector<double>{convex(std::log2(static_cast<double>(chunk)))};
+  };
+  ChunkSearchOptions options;
+  options.rounds = 3;
+  const ChunkSearchResult all = exhaustive_chunk_sweep(record, options);
+  ASSERT_EQ(visits.size(), 3u * 17u);
+  EXPECT_EQ(all.evaluations, 51);
+  for (int round = 0; round < 3; ++round) {
+    std::vector<int> this_round(visits.begin() + 17 * round, visits.begin() + 17 * (round + 1));
+    EXPECT_FALSE(std::is_sorted(this_round.begin(), this_round.end())) << "round " << round;
+    std::sort(this_round.begin(), this_round.end());
+    EXPECT_EQ(this_round, options.grid) << "round " << round;
+  }
+  EXPECT_EQ(all.at(256).samples_seconds.size(), 3u);
+  EXPECT_EQ(all.fastest_chunk, 256);
+  options.rounds = 0;
+  EXPECT_THROW(exhaustive_chunk_sweep(record, options), std::invalid_argument);
 }
 
 TEST(SearchChunk, ConfirmationRoundsAddSamplesToTheContenders) {

@@ -7,6 +7,8 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <numeric>
+#include <random>
 
 #include "contactlab/kernels/atomic_file.hpp"
 #include "contactlab/kernels/detector.hpp"
@@ -111,6 +113,56 @@ ModelChoice model_choice(const Variant& structure, std::span<const std::uint32_t
   return best;
 }
 
+// The final verification's timings: `rounds` samples of every distinct variant among the
+// contenders, taken round by round in a new random order each round (fixed seed).
+struct Verification {
+  std::vector<Variant> distinct;
+  std::vector<std::size_t> of_contender;       // contender -> index into distinct
+  std::vector<std::vector<double>> samples;    // per distinct variant, one per round
+  std::size_t best = 0;                        // distinct variant with the fastest paired ratio
+
+  const std::vector<double>& samples_of(std::size_t contender) const {
+    return samples[of_contender[contender]];
+  }
+  const std::vector<double>& best_samples() const { return samples[best]; }
+};
+
+Verification verify_choices(ContactDetector& detector, const Scene& scene, double diameter,
+                            int threads,
+                            const std::vector<std::pair<std::string, Variant>>& contenders,
+                            int rounds) {
+  Verification v;
+  for (const auto& [name, variant] : contenders) {
+    const auto found = std::find(v.distinct.begin(), v.distinct.end(), variant);
+    v.of_contender.push_back(static_cast<std::size_t>(found - v.distinct.begin()));
+    if (found == v.distinct.end()) v.distinct.push_back(variant);
+  }
+  v.samples.resize(v.distinct.size());
+  std::vector<std::size_t> order(v.distinct.size());
+  std::iota(order.begin(), order.end(), std::size_t{0});
+  std::mt19937_64 random(20131001);
+  for (const Variant& variant : v.distinct)
+    detector.run(scene, DetectOptions{variant, diameter, threads, nullptr});  // warm-up
+  for (int round = 0; round < rounds; ++round) {
+    std::shuffle(order.begin(), order.end(), random);
+    for (const std::size_t i : order) {
+      v.samples[i].push_back(
+          detector.run(scene, DetectOptions{v.distinct[i], diameter, threads, nullptr}).detect_s);
+    }
+  }
+  // The fastest: the smallest median of paired ratios against the first contender (any fixed
+  // reference ranks the same way up to noise, and this one is always present).
+  double best_ratio = std::numeric_limits<double>::infinity();
+  for (std::size_t i = 0; i < v.distinct.size(); ++i) {
+    const double r = paired_ratio(v.samples[i], v.samples[0]).median;
+    if (r < best_ratio) {
+      best_ratio = r;
+      v.best = i;
+    }
+  }
+  return v;
+}
+
 }  // namespace
 
 std::string structure_key(const Variant& variant) {
@@ -178,8 +230,11 @@ TuneReport tune(const Scene& scene, const SceneRecord& scene_record, double diam
                 const std::string& command_line) {
   const int threads = options.threads > 0 ? options.threads : omp_get_num_procs();
   if (options.chunk_grid.empty()) throw InputError("tune: the chunk grid is empty");
-  if (options.search_samples < 1 || options.exhaustive_samples < 1) {
-    throw InputError("tune: samples per chunk must be >= 1");
+  if (options.search_samples < 1 || options.exhaustive_rounds < 1 || options.verify_rounds < 1) {
+    throw InputError(fmt::format(
+        "tune: search samples ({}), exhaustive rounds ({}) and verification rounds ({}) must be "
+        ">= 1",
+        options.search_samples, options.exhaustive_rounds, options.verify_rounds));
   }
   ContactDetector detector;
   json report;
@@ -309,8 +364,8 @@ TuneReport tune(const Scene& scene, const SceneRecord& scene_record, double diam
   search_options.seed_chunk = model_chunk > 0 ? model_chunk : options.chunk_grid.back();
   // Budget: a fifth of what the exhaustive sweep would spend, in measured runs.
   search_options.budget.max_evaluations =
-      std::max(3, static_cast<int>(options.chunk_grid.size() * options.exhaustive_samples / 5 /
-                                   options.search_samples));
+      std::max(3, static_cast<int>(options.chunk_grid.size()) * options.exhaustive_rounds / 5 /
+                      options.search_samples);
   const ChunkSearchResult searched = search_chunk(measure_chunk, search_options);
   const Variant search_variant = with_schedule(screened_best->variant, kind, searched.chosen_chunk);
   // The search stands on the model (its seed and its schedule kind): its cost includes it.
@@ -322,6 +377,7 @@ TuneReport tune(const Scene& scene, const SceneRecord& scene_record, double diam
       {"chunk", searched.chosen_chunk},
       {"timed_runs", searched.evaluations * options.search_samples +
                          static_cast<int>(structures.size()) * (1 + options.search_samples)},
+      {"chunk_search_timed_runs", searched.evaluations * options.search_samples},
       {"evaluations", searched.evaluations},
       {"screening_cost_s", screening_cost},
       {"model_cost_s", model_cost},
@@ -330,68 +386,75 @@ TuneReport tune(const Scene& scene, const SceneRecord& scene_record, double diam
       {"screening", screening}};
   json searched_points = json::array();
   for (const ChunkMeasurement& m : searched.measured) {
-    searched_points.push_back({{"chunk", m.chunk}, {"median_s", sample_median(m.samples_seconds)}});
+    searched_points.push_back({{"chunk", m.chunk}, {"median_s", m.median_seconds}});
   }
   search_method["chunks_measured"] = searched_points;
 
   report["classic"] = classic_report(*screened_best);
 
-  // Exhaustive: every chunk for the searched structure and kind.
+  // Exhaustive: every chunk for the searched structure and kind, in interleaved rounds. Its
+  // fastest chunk is the exhaustive best.
   std::optional<Variant> exhaustive_variant;
   if (options.exhaustive) {
     const double exhaustive_start = omp_get_wtime();
     auto measure_exhaustive = [&](int chunk) {
       const DetectOptions o{with_schedule(screened_best->variant, kind, chunk), diameter, threads,
                             nullptr};
-      return detect_samples(detector, scene, o, options.exhaustive_samples);
+      return detect_samples(detector, scene, o, 1);
     };
-    const ChunkSearchResult all = exhaustive_chunk_sweep(measure_exhaustive, search_options);
+    ChunkSearchOptions exhaustive_options = search_options;
+    exhaustive_options.rounds = options.exhaustive_rounds;
+    const ChunkSearchResult all = exhaustive_chunk_sweep(measure_exhaustive, exhaustive_options);
     json points = json::array();
     for (const ChunkMeasurement& m : all.measured) {
       points.push_back({{"chunk", m.chunk},
-                        {"median_s", sample_median(m.samples_seconds)},
-                        {"ci95_low_s", m.interval.low_seconds},
-                        {"ci95_high_s", m.interval.high_seconds}});
+                        {"median_s", m.median_seconds},
+                        {"ci95_low_s", m.interval.low},
+                        {"ci95_high_s", m.interval.high}});
     }
-    exhaustive_variant = with_schedule(screened_best->variant, kind, all.chosen_chunk);
-    methods.push_back(
-        {{"method", "exhaustive"},
-         {"variant", to_string(with_schedule(screened_best->variant, kind, all.chosen_chunk))},
-         {"chunk", all.chosen_chunk},
-         {"fastest_chunk", all.fastest_chunk},
-         {"timed_runs", all.evaluations * options.exhaustive_samples},
-         {"tuning_cost_s", omp_get_wtime() - exhaustive_start},
-         {"chunks_measured", points}});
+    exhaustive_variant = with_schedule(screened_best->variant, kind, all.fastest_chunk);
+    methods.push_back({{"method", "exhaustive"},
+                       {"variant", to_string(*exhaustive_variant)},
+                       {"chunk", all.fastest_chunk},
+                       {"largest_equivalent_chunk", all.chosen_chunk},
+                       {"rounds", options.exhaustive_rounds},
+                       {"timed_runs", all.evaluations},
+                       {"tuning_cost_s", omp_get_wtime() - exhaustive_start},
+                       {"chunks_measured", points}});
   }
 
-  // Verification: each method's choice and each classic formula's k measured alike, interleaved
-  // round by round so that drift of the machine spreads over all of them. Regret is against
-  // the fastest of these verified medians: comparing with the minimum of the exhaustive sweep's
-  // own medians would be biased (the minimum of noisy medians is low by chance).
+  // Verification: each method's choice and each classic formula's k timed alike, every
+  // distinct variant once per round in a new random order. Comparisons are paired ratios
+  // within rounds (drift of the machine cancels), and regret is against the fastest verified
+  // choice, not the minimum of the exhaustive sweep's own medians (biased low by noise).
   std::vector<std::pair<std::string, Variant>> contenders{{"model", model_best->model.variant},
                                                           {"search", search_variant}};
   if (exhaustive_variant) contenders.push_back({"exhaustive", *exhaustive_variant});
   const std::size_t first_classic = contenders.size();
   for (const auto& c : report["classic"]) {
-    contenders.push_back({"classic", with_schedule(screened_best->variant, kind, c["chunk"].get<int>())});
+    contenders.push_back(
+        {"classic", with_schedule(screened_best->variant, kind, c["chunk"].get<int>())});
   }
-  std::vector<std::vector<double>> verify(contenders.size());
-  const int rounds = std::max(options.exhaustive_samples, 10);
-  for (int round = 0; round < rounds; ++round) {
-    for (std::size_t c = 0; c < contenders.size(); ++c) {
-      const DetectOptions o{contenders[c].second, diameter, threads, nullptr};
-      if (round == 0) detector.run(scene, o);
-      verify[c].push_back(detector.run(scene, o).detect_s);
-    }
-  }
-  double baseline = std::numeric_limits<double>::infinity();
-  for (const auto& v : verify) baseline = std::min(baseline, median(v));
+  const Verification verified =
+      verify_choices(detector, scene, diameter, threads, contenders, options.verify_rounds);
   auto attach = [&](json& target, std::size_t index) {
-    target["measured"] = summary_json(verify[index]);
-    target["regret"] = regret(median(verify[index]), baseline);
+    target["measured"] = summary_json(verified.samples_of(index));
+    const PairedRatio to_best = paired_ratio(verified.samples_of(index), verified.best_samples());
+    target["regret"] = to_best.median - 1.0;
+    target["regret_ci95"] = {to_best.interval.low - 1.0, to_best.interval.high - 1.0};
+    if (exhaustive_variant) {
+      const PairedRatio to_exhaustive =
+          paired_ratio(verified.samples_of(index), verified.samples_of(2));
+      target["vs_exhaustive"] = {
+          {"ratio_minus_one", to_exhaustive.median - 1.0},
+          {"ci95", {to_exhaustive.interval.low - 1.0, to_exhaustive.interval.high - 1.0}}};
+    }
   };
-  report["verification"] = {{"rounds", rounds},
-                            {"regret_against", "fastest median among the verified choices"}};
+  report["verification"] = {
+      {"rounds", options.verify_rounds},
+      {"distinct_variants", verified.distinct.size()},
+      {"best", to_string(verified.distinct[verified.best])},
+      {"regret_against", "fastest verified choice; median of per-round paired ratios - 1"}};
   attach(model_method, 0);
   attach(search_method, 1);
   if (exhaustive_variant) attach(methods.back(), 2);

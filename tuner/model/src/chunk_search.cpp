@@ -3,7 +3,9 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <numeric>
 #include <optional>
+#include <random>
 #include <stdexcept>
 #include <string>
 
@@ -11,15 +13,8 @@ namespace contactlab::tuner {
 
 namespace {
 
-// log P(B = i) for B ~ Bin(n, 1/2), in logs so that large samples do not underflow.
-double log_binomial_half(std::size_t n, std::size_t i) {
-  const auto dn = static_cast<double>(n), di = static_cast<double>(i);
-  return std::lgamma(dn + 1.0) - std::lgamma(di + 1.0) - std::lgamma(dn - di + 1.0) -
-         dn * std::log(2.0);
-}
-
-bool overlaps(const MedianConfidenceInterval& a, const MedianConfidenceInterval& b) {
-  return a.low_seconds <= b.high_seconds && b.low_seconds <= a.high_seconds;
+bool overlaps(const MedianInterval& a, const MedianInterval& b) {
+  return a.low <= b.high && b.low <= a.high;
 }
 
 void validate(const ChunkSearchOptions& options, const char* function) {
@@ -42,10 +37,15 @@ void validate(const ChunkSearchOptions& options, const char* function) {
         " evaluations and " + std::to_string(options.budget.max_measure_seconds) +
         " s (need >= 1 and > 0)");
   }
-  if (options.seed_chunk < 0 || options.confirmation_rounds < 0) {
-    throw std::invalid_argument(
-        name + ": seed_chunk = " + std::to_string(options.seed_chunk) +
-        ", confirmation_rounds = " + std::to_string(options.confirmation_rounds) + " must be >= 0");
+  if (options.seed_chunk < 0 || options.confirmation_rounds < 0 || options.rounds < 1 ||
+      !(options.equivalence_margin >= 0.0)) {
+    throw std::invalid_argument(name + ": seed_chunk = " + std::to_string(options.seed_chunk) +
+                                ", confirmation_rounds = " +
+                                std::to_string(options.confirmation_rounds) +
+                                ", equivalence_margin = " +
+                                std::to_string(options.equivalence_margin) +
+                                " must be >= 0, rounds = " + std::to_string(options.rounds) +
+                                " >= 1");
   }
 }
 
@@ -95,36 +95,45 @@ class GridSearch {
     }
     entry.samples_seconds.insert(entry.samples_seconds.end(), samples.begin(), samples.end());
     entry.evaluations += 1;
-    entry.interval = median_confidence_interval(entry.samples_seconds, options_.level);
+    entry.median_seconds = contactlab::tuner::median(entry.samples_seconds);
+    entry.interval = median_interval(entry.samples_seconds, options_.level);
     return true;
   }
 
   // The median of grid[i], measuring it first if it has not been; nullopt: budget spent.
   std::optional<double> median(std::size_t i) {
     if (!measured(i) && !measure_once(i)) return std::nullopt;
-    return entries_[i].interval.median_seconds;
+    return entries_[i].median_seconds;
   }
 
-  const MedianConfidenceInterval& interval(std::size_t i) const { return entries_[i].interval; }
+  const MedianInterval& interval(std::size_t i) const { return entries_[i].interval; }
 
   // Smallest median; ties go to the larger chunk. Requires at least one measurement.
   std::size_t fastest() const {
     std::optional<std::size_t> best;
     for (std::size_t i = 0; i < entries_.size(); ++i) {
-      if (measured(i) && (!best || entries_[i].interval.median_seconds <=
-                                       entries_[*best].interval.median_seconds)) {
+      if (measured(i) &&
+          (!best || entries_[i].median_seconds <= entries_[*best].median_seconds)) {
         best = i;
       }
     }
     return *best;
   }
 
-  // The largest measured chunk whose interval overlaps the fastest one's.
+  // Statistically and practically as fast as grid[best]: intervals overlap, and the median is
+  // within the equivalence margin.
+  bool equivalent(std::size_t i, std::size_t best) const {
+    return measured(i) && overlaps(entries_[i].interval, entries_[best].interval) &&
+           entries_[i].median_seconds <=
+               (1.0 + options_.equivalence_margin) * entries_[best].median_seconds;
+  }
+
+  // The largest measured chunk equivalent to the fastest.
   std::size_t chosen() const {
     const std::size_t best = fastest();
     std::size_t choice = best;
     for (std::size_t i = best + 1; i < entries_.size(); ++i) {
-      if (measured(i) && overlaps(entries_[i].interval, entries_[best].interval)) choice = i;
+      if (equivalent(i, best)) choice = i;
     }
     return choice;
   }
@@ -245,45 +254,6 @@ bool walk_up_through_ties(GridSearch& search) {
 
 }  // namespace
 
-double sample_median(std::span<const double> samples) {
-  if (samples.empty()) throw std::invalid_argument("sample_median: no samples");
-  std::vector<double> sorted(samples.begin(), samples.end());
-  std::sort(sorted.begin(), sorted.end());
-  const std::size_t n = sorted.size();
-  return n % 2 == 1 ? sorted[n / 2] : 0.5 * (sorted[n / 2 - 1] + sorted[n / 2]);
-}
-
-MedianConfidenceInterval median_confidence_interval(std::span<const double> samples, double level) {
-  if (samples.empty()) throw std::invalid_argument("median_confidence_interval: no samples");
-  if (!(level > 0.0 && level < 1.0)) {
-    throw std::invalid_argument("median_confidence_interval: level = " + std::to_string(level) +
-                                " must be in (0, 1)");
-  }
-  std::vector<double> sorted(samples.begin(), samples.end());
-  std::sort(sorted.begin(), sorted.end());
-  const std::size_t n = sorted.size();
-  MedianConfidenceInterval interval;
-  interval.median_seconds = n % 2 == 1 ? sorted[n / 2] : 0.5 * (sorted[n / 2 - 1] + sorted[n / 2]);
-  // coverage(l) = 1 - 2 P(B <= l - 1); the largest l (narrowest interval) still >= level.
-  std::size_t rank = 1;
-  double below = 0.0;  // P(B <= rank - 1), for the rank being tried
-  double coverage = 1.0 - 2.0 * std::exp(log_binomial_half(n, 0));
-  for (std::size_t l = 2; l <= (n + 1) / 2; ++l) {
-    below += std::exp(log_binomial_half(n, l - 2));
-    const double tail = below + std::exp(log_binomial_half(n, l - 1));
-    const double candidate = 1.0 - 2.0 * tail;
-    if (candidate < level) break;
-    rank = l;
-    coverage = candidate;
-  }
-  interval.low_rank = rank;
-  interval.high_rank = n + 1 - rank;
-  interval.low_seconds = sorted[interval.low_rank - 1];
-  interval.high_seconds = sorted[interval.high_rank - 1];
-  interval.coverage = std::max(coverage, 0.0);
-  return interval;
-}
-
 const ChunkMeasurement& ChunkSearchResult::at(int chunk) const {
   for (const ChunkMeasurement& entry : measured) {
     if (entry.chunk == chunk) return entry;
@@ -302,7 +272,7 @@ ChunkSearchResult search_chunk(const MeasureChunk& measure, const ChunkSearchOpt
       const std::size_t best = search.fastest();
       std::vector<std::size_t> contenders;
       for (std::size_t i = 0; i < search.size(); ++i) {
-        if (search.measured(i) && overlaps(search.interval(i), search.interval(best))) {
+        if (search.equivalent(i, best)) {
           contenders.push_back(i);
         }
       }
@@ -320,7 +290,13 @@ ChunkSearchResult exhaustive_chunk_sweep(const MeasureChunk& measure,
                                          const ChunkSearchOptions& options) {
   validate(options, "exhaustive_chunk_sweep");
   GridSearch search(measure, options, false, "exhaustive_chunk_sweep");
-  for (std::size_t i = 0; i < search.size(); ++i) search.measure_once(i);
+  std::vector<std::size_t> order(search.size());
+  std::iota(order.begin(), order.end(), std::size_t{0});
+  std::mt19937_64 random(options.order_seed);
+  for (int round = 0; round < options.rounds; ++round) {
+    std::shuffle(order.begin(), order.end(), random);
+    for (const std::size_t i : order) search.measure_once(i);
+  }
   return search.finish();
 }
 
@@ -334,8 +310,8 @@ double regret(double chosen_seconds, double best_seconds) {
 }
 
 double regret(const ChunkSearchResult& exhaustive, int chosen_chunk) {
-  return regret(exhaustive.at(chosen_chunk).interval.median_seconds,
-                exhaustive.at(exhaustive.fastest_chunk).interval.median_seconds);
+  return regret(exhaustive.at(chosen_chunk).median_seconds,
+                exhaustive.at(exhaustive.fastest_chunk).median_seconds);
 }
 
 }  // namespace contactlab::tuner

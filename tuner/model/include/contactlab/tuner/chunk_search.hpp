@@ -3,43 +3,24 @@
 //
 // The caller runs the kernel: measure(k) returns one or more timed samples (seconds) of the
 // loop with chunk k. Calls on the same k add samples. Every comparison uses the median, and
-// the final choice uses a distribution-free 95% interval of the median (order statistics of
-// the binomial distribution): among the chunks whose interval overlaps the fastest one's, the
-// LARGEST chunk wins (same speed within the noise, fewer chunk boundaries, better locality).
-// Give measure() at least 6 samples per call: below that even [min, max] covers the median
-// with less than 95% probability (the interval then reports its true coverage).
+// the final choice uses a distribution-free 95% interval of the median (statistics.hpp):
+// among the chunks whose interval overlaps the fastest one's and whose median is within the
+// equivalence margin of it, the LARGEST chunk wins (same speed within the noise, fewer chunk
+// boundaries, better locality). The margin matters on noisy machines: with few samples every
+// interval overlaps, and the overlap test alone would pick the largest chunk measured.
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <functional>
 #include <limits>
 #include <span>
 #include <vector>
 
 #include "contactlab/tuner/schedule_model.hpp"
+#include "contactlab/tuner/statistics.hpp"
 
 namespace contactlab::tuner {
-
-// Median and distribution-free confidence interval of the median of a sample.
-struct MedianConfidenceInterval {
-  double median_seconds = 0.0;
-  double low_seconds = 0.0;   // order statistic x(low_rank)
-  double high_seconds = 0.0;  // order statistic x(high_rank)
-  std::size_t low_rank = 0;   // 1-based ranks in the sorted sample
-  std::size_t high_rank = 0;
-  // P(x(low_rank) <= true median <= x(high_rank)) = 1 - 2 P(B < low_rank), B ~ Bin(n, 1/2).
-  double coverage = 0.0;
-};
-
-// The middle value (mean of the two middle values for an even count). Throws
-// std::invalid_argument for an empty sample.
-double sample_median(std::span<const double> samples);
-
-// The narrowest symmetric interval [x(l), x(n+1-l)] whose coverage is at least `level`;
-// [min, max] (coverage below level) when the sample is too small for it. Throws
-// std::invalid_argument for an empty sample or level outside (0, 1).
-MedianConfidenceInterval median_confidence_interval(std::span<const double> samples,
-                                                    double level = 0.95);
 
 // Returns the timed samples (seconds, >= 0) of one run of the loop with the given chunk.
 using MeasureChunk = std::function<std::vector<double>(int chunk)>;
@@ -54,6 +35,13 @@ struct ChunkSearchOptions {
   int seed_chunk = 0;  // the model's prediction (nearest grid point in log2); 0 = grid middle
   SearchBudget budget;
   double level = 0.95;
+  // A larger chunk replaces the fastest only if its median is at most this much slower
+  // (relative) as well as its interval overlapping the fastest one's.
+  double equivalence_margin = 0.02;
+  // Exhaustive sweep only: rounds over the whole grid, each in a new random order (seeded),
+  // so that the machine's drift spreads over all chunks instead of favouring some.
+  int rounds = 1;
+  std::uint64_t order_seed = 1;
   // After the search, re-measure every chunk whose interval overlaps the fastest one's this
   // many times (more samples, narrower intervals), then re-decide.
   int confirmation_rounds = 0;
@@ -62,14 +50,15 @@ struct ChunkSearchOptions {
 struct ChunkMeasurement {
   int chunk = 0;
   std::vector<double> samples_seconds;  // all samples, in measuring order
-  MedianConfidenceInterval interval;
+  double median_seconds = 0.0;
+  MedianInterval interval;  // of the median
   int evaluations = 0;  // calls of measure() for this chunk
 };
 
 enum class SearchStop { kConverged, kEvaluationBudget, kTimeBudget };
 
 struct ChunkSearchResult {
-  int chosen_chunk = 0;   // the largest chunk whose interval overlaps the fastest one's
+  int chosen_chunk = 0;   // the largest chunk equivalent to the fastest (see above)
   int fastest_chunk = 0;  // the smallest median (ties: the larger chunk)
   std::vector<ChunkMeasurement> measured;  // ascending chunk
   int evaluations = 0;                     // calls of measure()
@@ -96,8 +85,9 @@ struct ChunkSearchResult {
 // samples or a sample that is not finite and >= 0.
 ChunkSearchResult search_chunk(const MeasureChunk& measure, const ChunkSearchOptions& options);
 
-// Measures every grid chunk once (in ascending order; the budget is ignored), then makes the
-// same choice. Ground truth for search_chunk and for the model.
+// Measures every grid chunk options.rounds times, round by round, each round in a seeded random
+// order (the budget is ignored), then makes the same choice. Ground truth for search_chunk and
+// for the model: its fastest_chunk is the exhaustive best.
 ChunkSearchResult exhaustive_chunk_sweep(const MeasureChunk& measure,
                                          const ChunkSearchOptions& options);
 

@@ -49,6 +49,20 @@ struct Summary {
 
 Summary summarize(std::span<const double> values, double level = 0.95);
 
+// Paired comparison of two configurations timed in the same rounds (a_i and b_i back to back,
+// in round i): the median of the per-round ratios a_i / b_i and its order-statistic interval.
+// Pairing cancels what a round shares (the machine's drift), so that differences of a few
+// percent are resolved with far fewer rounds than by comparing two medians.
+struct PairedRatio {
+  std::size_t pairs = 0;
+  double median = 0.0;  // of a_i / b_i
+  MedianInterval interval;
+};
+
+// Throws InputError for no pairs, unequal lengths, a NaN, or some b_i <= 0.
+PairedRatio paired_ratio(std::span<const double> a, std::span<const double> b,
+                         double level = 0.95);
+
 // Load imbalance of one parallel loop from each thread's busy time:
 // (t_max - t_mean) / t_max; 0 for no threads or when every time is 0.
 double load_imbalance(std::span<const double> thread_busy_s);

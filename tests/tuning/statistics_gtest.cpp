@@ -106,6 +106,48 @@ TEST(MedianInterval, DegenerateSamples) {
   EXPECT_THROW(median_interval(one_to(5), 0.0), InputError);
 }
 
+TEST(MedianInterval, LargeSamplesDoNotUnderflow) {
+  const MedianInterval interval = median_interval(one_to(2000), 0.95);
+  EXPECT_GE(interval.coverage, 0.95);
+  EXPECT_LT(interval.coverage, 0.96);
+  // Normal approximation: n/2 -+ 1.96 sqrt(n)/2 = 1000 -+ 43.8.
+  EXPECT_NEAR(static_cast<double>(interval.lower_rank), 956.0, 2.0);
+  EXPECT_EQ(interval.lower_rank + interval.upper_rank, 2001u);
+}
+
+TEST(PairedRatio, RoundDriftCancels) {
+  // Every round the machine is slower or faster by a different factor; a is 10% slower than
+  // b in every round. Unpaired medians would see the drift, the paired ratio does not.
+  const std::vector<double> drift{1.0, 1.4, 0.9, 1.2, 1.0, 1.6, 1.1, 0.95};
+  std::vector<double> a, b;
+  for (const double f : drift) {
+    b.push_back(0.2 * f);
+    a.push_back(0.22 * f);
+  }
+  const PairedRatio r = paired_ratio(a, b);
+  EXPECT_EQ(r.pairs, drift.size());
+  EXPECT_NEAR(r.median, 1.1, 1e-12);
+  EXPECT_NEAR(r.interval.low, 1.1, 1e-12);
+  EXPECT_NEAR(r.interval.high, 1.1, 1e-12);
+  EXPECT_TRUE(r.interval.reached_level);
+}
+
+TEST(PairedRatio, IntervalFromTheRatiosOrderStatistics) {
+  // Ratios 1..10 (b = 1): the median 5.5 and, as for any 10 samples, ranks 2 and 9.
+  const std::vector<double> ones(10, 1.0);
+  const PairedRatio r = paired_ratio(one_to(10), ones);
+  EXPECT_DOUBLE_EQ(r.median, 5.5);
+  EXPECT_EQ(r.interval.low, 2.0);
+  EXPECT_EQ(r.interval.high, 9.0);
+}
+
+TEST(PairedRatio, RejectsBadPairs) {
+  EXPECT_THROW(paired_ratio(std::vector<double>{}, std::vector<double>{}), InputError);
+  EXPECT_THROW(paired_ratio(one_to(3), one_to(4)), InputError);
+  EXPECT_THROW(paired_ratio(one_to(2), std::vector<double>{1.0, 0.0}), InputError);
+  EXPECT_THROW(paired_ratio(std::vector<double>{1.0, std::nan("")}, one_to(2)), InputError);
+}
+
 TEST(Summarize, KnownValues) {
   const Summary s = summarize(std::vector<double>{4.0, 1.0, 3.0, 2.0, 10.0, 6.0});
   EXPECT_EQ(s.count, 6u);

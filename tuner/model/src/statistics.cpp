@@ -1,8 +1,7 @@
 #include "contactlab/tuner/statistics.hpp"
 
-#include <omp.h>
-
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <limits>
 #include <string>
@@ -100,6 +99,27 @@ Summary summarize(std::span<const double> values, double level) {
   return s;
 }
 
+PairedRatio paired_ratio(std::span<const double> a, std::span<const double> b, double level) {
+  if (a.size() != b.size()) {
+    throw InputError("paired_ratio: " + std::to_string(a.size()) + " and " +
+                     std::to_string(b.size()) + " samples: pairs need equal counts");
+  }
+  std::vector<double> ratios;
+  ratios.reserve(a.size());
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    if (!(b[i] > 0.0)) {
+      throw InputError("paired_ratio: round " + std::to_string(i) + " divides by " +
+                       std::to_string(b[i]) + " (need > 0)");
+    }
+    ratios.push_back(a[i] / b[i]);
+  }
+  PairedRatio result;
+  result.pairs = ratios.size();
+  result.median = median(ratios);  // throws for no pairs or a NaN
+  result.interval = median_interval(ratios, level);
+  return result;
+}
+
 double load_imbalance(std::span<const double> thread_busy_s) {
   if (thread_busy_s.empty()) return 0.0;
   double max = 0.0, sum = 0.0;
@@ -162,7 +182,10 @@ RepetitionOutcome repeat_measurement(const RepetitionPolicy& policy,
                                      const std::function<double()>& sample) {
   validate(policy);
   RepetitionOutcome outcome;
-  const double start = omp_get_wtime();
+  const auto start = std::chrono::steady_clock::now();
+  auto seconds_since_start = [&] {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  };
   for (int i = 0; i < policy.warmup; ++i) {
     warm_up();
     ++outcome.warmup_runs;
@@ -171,7 +194,7 @@ RepetitionOutcome repeat_measurement(const RepetitionPolicy& policy,
   for (;;) {
     values.push_back(sample());
     ++outcome.repetitions;
-    const double elapsed = omp_get_wtime() - start;
+    const double elapsed = seconds_since_start();
     if (outcome.repetitions < policy.repeat) continue;
     if (!policy.adaptive) {
       outcome.stop = StopReason::kFixedCount;
@@ -191,7 +214,7 @@ RepetitionOutcome repeat_measurement(const RepetitionPolicy& policy,
       break;
     }
   }
-  outcome.elapsed_s = omp_get_wtime() - start;
+  outcome.elapsed_s = seconds_since_start();
   return outcome;
 }
 
