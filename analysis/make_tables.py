@@ -194,14 +194,15 @@ def tuning(results_dir, out):
     if not os.path.isdir(tuning_dir):
         return
     out.append("\n## Tuning: model vs search vs exhaustive (2 threads)\n")
-    out.append("T_c median and regret come from a final verification in which every choice (the "
-               "methods' and the classic formulas') is timed alike, round by round interleaved; "
-               "regret = (median − best median) / best median. Cost = seconds the method spent "
-               "choosing (the search's includes the model it is seeded by); timed runs = runs on "
-               "the scene. This VM's run-to-run noise is ±20–40 % (see the intervals in the JSON), "
-               "so regrets of a few percent are within noise.\n")
-    out.append("| scene | method | choice | T_c median [s] | regret | cost [s] | timed runs |")
-    out.append("|---|---|---|---|---|---|---|")
+    out.append("T_c median and regret come from a final verification in which every distinct "
+               "choice (the methods' and the classic formulas') is timed once per round, in a new "
+               "random order each round. Regret = median of the per-round ratios to the fastest "
+               "verified choice − 1; \"vs exhaustive\" = the same against the exhaustive best "
+               "(the issue's target); brackets: 95% intervals of those medians. Cost = seconds the "
+               "method spent choosing (the search's includes the screening and the model it is "
+               "seeded by); timed runs = runs on the scene.\n")
+    out.append("| scene | method | choice | T_c median [s] | regret [95% CI] | vs exhaustive [95% CI] | cost [s] | timed runs |")
+    out.append("|---|---|---|---|---|---|---|---|")
     predictions = []
     for name in sorted(os.listdir(tuning_dir)):
         if not name.endswith(".json"):
@@ -211,23 +212,33 @@ def tuning(results_dir, out):
         if need(t, "$", "schema_version") != 1:
             raise SchemaError(f"{name}: $.schema_version: expected 1")
         scene = name[:-5]
-        exhaustive_cost = None
+        rounds = t.get("verification", {}).get("rounds", "?")
+
+        def relative(entry, key, interval_key):
+            if key not in entry:
+                return "–"
+            value = entry[key] if interval_key else entry[key]["ratio_minus_one"]
+            ci = entry[interval_key] if interval_key else entry[key]["ci95"]
+            return f"{100 * value:+.1f}% [{100 * ci[0]:+.1f}, {100 * ci[1]:+.1f}]"
+
+        exhaustive = next((m for m in t["methods"] if m["method"] == "exhaustive"), None)
         for m in need(t, "$", "methods"):
             measured = m.get("measured", {})
-            regret = f"{100 * m['regret']:+.1f}%" if "regret" in m else "–"
             median = f"{measured['median_s']:.4f}" if measured else "–"
-            if m["method"] == "exhaustive":
-                exhaustive_cost = m["tuning_cost_s"]
-            out.append(f"| {scene} | {m['method']} | `{m['variant']}` | {median} | {regret} | "
+            out.append(f"| {scene} | {m['method']} | `{m['variant']}` | {median} | "
+                       f"{relative(m, 'regret', 'regret_ci95')} | {relative(m, 'vs_exhaustive', None)} | "
                        f"{m['tuning_cost_s']:.1f} | {m.get('timed_runs', '–')} |")
         for c in need(t, "$", "classic"):
-            regret = f"{100 * c['regret']:+.1f}%" if "regret" in c else "–"
             out.append(f"| {scene} | classic: {c['name']} ({c['inputs']}) | `{c.get('variant', c['chunk'])}` | "
-                       f"{c.get('measured', {}).get('median_s', float('nan')):.4f} | {regret} | – | – |")
+                       f"{c.get('measured', {}).get('median_s', float('nan')):.4f} | "
+                       f"{relative(c, 'regret', 'regret_ci95')} | {relative(c, 'vs_exhaustive', None)} | – | – |")
         search = next((m for m in t["methods"] if m["method"] == "search"), None)
-        if search and exhaustive_cost:
-            out.append(f"| {scene} | search / exhaustive cost | | | | "
-                       f"{search['chunk_search_cost_s'] / exhaustive_cost:.0%} (chunk search only) | |")
+        if search and exhaustive:
+            out.append(f"| {scene} | search / exhaustive cost | | | | | "
+                       f"{search['chunk_search_cost_s'] / exhaustive['tuning_cost_s']:.0%} (chunk search), "
+                       f"{search['tuning_cost_s'] / exhaustive['tuning_cost_s']:.0%} (all of it) | "
+                       f"{search.get('chunk_search_timed_runs', '–')} / {exhaustive['timed_runs']} |")
+        out.append(f"| {scene} | verification | | | {rounds} rounds | | | |")
         for p in t.get("predictions", []):
             predictions.append((scene, p))
     if predictions:

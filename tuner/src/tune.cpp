@@ -363,6 +363,9 @@ TuneReport tune(const Scene& scene, const SceneRecord& scene_record, double diam
   const int model_chunk = screened_best->model.variant.schedule.chunk;
   search_options.seed_chunk = model_chunk > 0 ? model_chunk : options.chunk_grid.back();
   // Budget: a fifth of what the exhaustive sweep would spend, in measured runs.
+  // What the bracket and golden section leave of the budget goes to confirming the chunks
+  // still equivalent to the fastest (more samples, narrower intervals).
+  search_options.confirmation_rounds = 2;
   search_options.budget.max_evaluations =
       std::max(3, static_cast<int>(options.chunk_grid.size()) * options.exhaustive_rounds / 5 /
                       options.search_samples);
