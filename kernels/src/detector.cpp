@@ -400,8 +400,7 @@ DetectRun ContactDetector::run(const Scene& scene, const DetectOptions& options)
   return run;
 }
 
-std::vector<std::uint32_t> ContactDetector::iteration_work(const Scene& scene,
-                                                           const DetectOptions& options) {
+LoopWork ContactDetector::iteration_work(const Scene& scene, const DetectOptions& options) {
   DetectRun run;
   const CellGrid grid = prepare(scene, options, run);
   const Variant& variant = options.variant;
@@ -416,24 +415,34 @@ std::vector<std::uint32_t> ContactDetector::iteration_work(const Scene& scene,
   auto tests_of = [&](std::uint32_t s_h) {
     return static_cast<std::uint32_t>(nb.tests_from(s_h, half));
   };
-  std::vector<std::uint32_t> work;
+  LoopWork work;
   const std::uint32_t n = static_cast<std::uint32_t>(scene.size());
   if (variant.loop == LoopKind::kParticle) {
-    work.resize(n);
+    work.tests.resize(n);
+    work.homes.assign(n, 1);
+    work.builds.resize(n);
+    std::uint32_t previous_key = UINT32_MAX;
     for (std::uint32_t h = 0; h < n; ++h) {
-      nb.build(grid, registry_, stencil,
-               grid.coords_of(coordinates.x[h], coordinates.y[h], coordinates.z[h]));
-      work[h] = tests_of(slot_of(h));
+      const auto home = grid.coords_of(coordinates.x[h], coordinates.y[h], coordinates.z[h]);
+      const std::uint32_t key = grid.key(home[0], home[1], home[2]);
+      nb.build(grid, registry_, stencil, home);
+      work.tests[h] = tests_of(slot_of(h));
+      work.builds[h] = key != previous_key ? 1 : 0;
+      previous_key = key;
     }
   } else {
-    work.assign(grid.key_count(), 0);
+    work.tests.assign(grid.key_count(), 0);
+    work.homes.assign(grid.key_count(), 0);
+    work.builds.assign(grid.key_count(), 0);
     for (std::uint64_t key = 0; key < grid.key_count(); ++key) {
       const std::uint32_t begin = registry_.cell_begin[key], end = registry_.cell_begin[key + 1];
       if (begin == end) continue;
       const std::uint32_t first = registry_.slot_particle[begin];
       nb.build(grid, registry_, stencil,
                grid.coords_of(scene.x[first], scene.y[first], scene.z[first]));
-      for (std::uint32_t s = begin; s < end; ++s) work[key] += tests_of(s);
+      for (std::uint32_t s = begin; s < end; ++s) work.tests[key] += tests_of(s);
+      work.homes[key] = end - begin;
+      work.builds[key] = 1;
     }
   }
   return work;

@@ -2,6 +2,7 @@
 // observer hooks, and reuse of one detector across runs of different sizes and variants.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <limits>
@@ -117,8 +118,9 @@ TEST(Detector, WorkingIdsMapBackToInputRows) {
   }
 }
 
-// iteration_work: the pair tests of each iteration of the parallel loop, in loop order.
-TEST(Detector, IterationWorkIsThePairTestsOfEachIteration) {
+// iteration_work: the pair tests, home particles and neighbour-range builds of each iteration
+// of the parallel loop, in loop order.
+TEST(Detector, IterationWorkIsWhatEachIterationDoes) {
   SceneSpec spec;
   spec.kind = SceneKind::kBlobs;
   spec.n = 3000;
@@ -135,16 +137,35 @@ TEST(Detector, IterationWorkIsThePairTestsOfEachIteration) {
       options.variant = v;
       options.diameter = spec.diameter;
       options.threads = 2;
-      const std::vector<std::uint32_t> work = detector.iteration_work(scene, options);
+      const LoopWork loop = detector.iteration_work(scene, options);
+      const std::vector<std::uint32_t>& work = loop.tests;
       const DetectRun run = detector.run(scene, options);
       std::uint64_t sum = 0;
       for (const auto w : work) sum += w;
       EXPECT_EQ(sum, run.candidate_tests);
+      ASSERT_EQ(loop.homes.size(), work.size());
+      ASSERT_EQ(loop.builds.size(), work.size());
+      std::uint64_t homes = 0, builds = 0;
+      for (std::size_t i = 0; i < work.size(); ++i) {
+        homes += loop.homes[i];
+        builds += loop.builds[i];
+      }
+      EXPECT_EQ(homes, scene.size());
       const CellGrid grid(
           scene.box, poly ? scene.max_diameter() : spec.diameter,
           v.order == Order::kMorton ? CellNumbering::kMorton : CellNumbering::kLinear);
+      std::set<std::uint32_t> occupied;
+      for (std::size_t i = 0; i < scene.size(); ++i) {
+        const auto c = grid.coords_of(scene.x[i], scene.y[i], scene.z[i]);
+        occupied.insert(grid.key(c[0], c[1], c[2]));
+      }
       if (v.loop == LoopKind::kCell) {
         ASSERT_EQ(work.size(), grid.key_count());
+        // Every occupied cell builds its ranges once, and only those.
+        EXPECT_EQ(builds, occupied.size());
+        for (std::size_t k = 0; k < work.size(); ++k) {
+          ASSERT_EQ(loop.builds[k], loop.homes[k] > 0 ? 1 : 0) << "key " << k;
+        }
         if (v.stencil == Stencil::kFull) {
           std::vector<std::uint64_t> per_key(grid.key_count(), 0);
           for (std::size_t i = 0; i < scene.size(); ++i) {
@@ -156,6 +177,15 @@ TEST(Detector, IterationWorkIsThePairTestsOfEachIteration) {
         }
       } else {
         ASSERT_EQ(work.size(), scene.size());
+        EXPECT_TRUE(std::all_of(loop.homes.begin(), loop.homes.end(),
+                                [](std::uint32_t h) { return h == 1; }));
+        // In cell order the particles of a cell are consecutive: one build per occupied cell.
+        // In input order almost every particle starts a new cell.
+        if (v.order != Order::kUnsorted) {
+          EXPECT_EQ(builds, occupied.size());
+        } else {
+          EXPECT_GE(builds, occupied.size());
+        }
         if (v.stencil == Stencil::kFull) {
           // Iteration h is working particle h: an input row, or a slot of the sorted order.
           const auto map = detector.working_to_input();

@@ -19,17 +19,22 @@ std::uint64_t sum(const Sizes& sizes) {
   return std::accumulate(sizes.begin(), sizes.end(), std::uint64_t{0});
 }
 
-TEST(IterationTimeStatistics, UsesThePerTestAndPerIterationCosts) {
+TEST(IterationTimeStatistics, PricesEachIterationsTestsHomesAndBuilds) {
   MachineCosts costs;
   costs.seconds_per_test = 2.0;
   costs.seconds_per_iteration = 5.0;
+  costs.seconds_per_home = 7.0;
+  costs.seconds_per_build = 11.0;
+  const std::vector<std::uint32_t> tests{1, 3}, homes{1, 2};
+  const std::vector<std::uint8_t> builds{0, 1};
   const IterationTimeStatistics stats =
-      iteration_time_statistics(std::vector<std::uint32_t>{1, 3}, costs);
+      iteration_time_statistics(WorkView(tests, homes, builds), costs);
   EXPECT_EQ(stats.iterations, 2u);
   EXPECT_DOUBLE_EQ(stats.mean_tests, 2.0);
   EXPECT_DOUBLE_EQ(stats.stddev_tests, 1.0);  // population: sqrt(((1-2)^2 + (3-2)^2) / 2)
-  EXPECT_DOUBLE_EQ(stats.mean_seconds, 5.0 + 2.0 * 2.0);
-  EXPECT_DOUBLE_EQ(stats.stddev_seconds, 2.0);
+  // Iteration times 5 + 7 + 2 = 14 and 5 + 14 + 11 + 6 = 36.
+  EXPECT_DOUBLE_EQ(stats.mean_seconds, 25.0);
+  EXPECT_DOUBLE_EQ(stats.stddev_seconds, 11.0);
   EXPECT_EQ(iteration_time_statistics(std::vector<std::uint32_t>{}, costs).iterations, 0u);
 }
 

@@ -199,18 +199,27 @@ MachineCosts decimal_costs() {
   costs.seconds_per_grab = 1e3;
   costs.seconds_per_stream_break = 1e4;
   costs.seconds_per_cold_test = 1e5;
+  costs.seconds_per_home = 1e6;
   costs.seconds_per_region = 1e7;
+  costs.seconds_per_build = 1e8;
   return costs;
 }
+
+// A tests-only work view counts one home and one build per iteration.
+constexpr double kTenHomesAndBuilds = 10 * 1e6 + 10 * 1e8;
 
 TEST(CostModel, PricesEveryTermOfStaticBlock) {
   const ScheduleOutcome outcome =
       simulate_schedule(fig6_layout(), 2, {ScheduleKind::kStatic, 0}, decimal_costs());
-  // Thread 0: 27 tests, 10 iterations, 1 chunk, 1 break whose first iteration has 3 tests.
-  EXPECT_DOUBLE_EQ(outcome.threads[0].seconds, 27 + 10 * 10 + 100 + 1e4 + 3 * 1e5);
+  // Thread 0: 27 tests, 10 iterations (homes, builds), 1 chunk, 1 break whose first iteration
+  // has 3 tests.
+  EXPECT_DOUBLE_EQ(outcome.threads[0].seconds,
+                   27 + 10 * 10 + 100 + 1e4 + 3 * 1e5 + kTenHomesAndBuilds);
   // Thread 1: 75 tests, 10 iterations, 1 chunk, 1 break at iteration 10 (3 tests).
-  EXPECT_DOUBLE_EQ(outcome.threads[1].seconds, 75 + 10 * 10 + 100 + 1e4 + 3 * 1e5);
-  EXPECT_DOUBLE_EQ(outcome.makespan_seconds, 1e7 + 75 + 10 * 10 + 100 + 1e4 + 3 * 1e5);
+  EXPECT_DOUBLE_EQ(outcome.threads[1].seconds,
+                   75 + 10 * 10 + 100 + 1e4 + 3 * 1e5 + kTenHomesAndBuilds);
+  EXPECT_DOUBLE_EQ(outcome.makespan_seconds,
+                   1e7 + 75 + 10 * 10 + 100 + 1e4 + 3 * 1e5 + kTenHomesAndBuilds);
   EXPECT_EQ(outcome.threads[0].grabs, 0u);
 }
 
@@ -220,14 +229,16 @@ TEST(CostModel, CountsBreaksOnlyWhereAThreadJumps) {
       simulate_schedule(fig6_layout(), 1, {ScheduleKind::kStatic, 4}, decimal_costs());
   EXPECT_EQ(one.threads[0].chunks, 5u);
   EXPECT_EQ(one.threads[0].stream_breaks, 1u);
-  EXPECT_DOUBLE_EQ(one.threads[0].seconds, 102 + 20 * 10 + 5 * 100 + 1e4 + 3 * 1e5);
+  EXPECT_DOUBLE_EQ(one.threads[0].seconds,
+                   102 + 20 * 10 + 5 * 100 + 1e4 + 3 * 1e5 + 2 * kTenHomesAndBuilds);
   // Two threads, static,5: every chunk starts a new stream; thread 1's chunks begin at
   // iterations 5 (2 tests) and 15 (8 tests).
   const ScheduleOutcome two =
       simulate_schedule(fig6_layout(), 2, {ScheduleKind::kStatic, 5}, decimal_costs());
   EXPECT_EQ(two.threads[1].stream_breaks, 2u);
   EXPECT_EQ(two.threads[1].cold_tests, 10u);
-  EXPECT_DOUBLE_EQ(two.threads[1].seconds, 53 + 10 * 10 + 2 * 100 + 2 * 1e4 + 10 * 1e5);
+  EXPECT_DOUBLE_EQ(two.threads[1].seconds,
+                   53 + 10 * 10 + 2 * 100 + 2 * 1e4 + 10 * 1e5 + kTenHomesAndBuilds);
 }
 
 TEST(CostModel, SelfScheduledLoopsPayAGrabPerChunkPlusTheLastEmptyOne) {
@@ -236,8 +247,45 @@ TEST(CostModel, SelfScheduledLoopsPayAGrabPerChunkPlusTheLastEmptyOne) {
   EXPECT_EQ(outcome.threads[0].chunks, 4u);
   EXPECT_EQ(outcome.threads[0].grabs, 5u);
   EXPECT_EQ(outcome.threads[0].stream_breaks, 1u);
-  EXPECT_DOUBLE_EQ(outcome.threads[0].seconds, 102 + 20 * 10 + 5 * 1e3 + 1e4 + 3 * 1e5);
+  EXPECT_DOUBLE_EQ(outcome.threads[0].seconds,
+                   102 + 20 * 10 + 5 * 1e3 + 1e4 + 3 * 1e5 + 2 * kTenHomesAndBuilds);
   EXPECT_TRUE(outcome.self_scheduled);
+}
+
+// The Fig. 6 layout as a particle loop in cell order: the first particle of each cell
+// (iterations 0, 4, 7, 11) builds the neighbour ranges, the others reuse them, unless a chunk
+// that does not continue its thread's stream starts mid-cell.
+TEST(CostModel, ParticleLoopBuildsOncePerCellAndAtBreaksMidCell) {
+  const std::vector<std::uint32_t> tests = fig6_layout();
+  const std::vector<std::uint32_t> homes(20, 1);
+  std::vector<std::uint8_t> builds(20, 0);
+  for (const int first : {0, 4, 7, 11}) builds[first] = 1;
+  const WorkView work(tests, homes, builds);
+  // One thread, static,4: one stream, 4 builds.
+  EXPECT_EQ(simulate_schedule(work, 1, {ScheduleKind::kStatic, 4}).threads[0].builds, 4u);
+  // Two threads, static,5: thread 0 runs [0,5) (builds at 0 and 4) and [10,15) (11, and 10
+  // starts mid-cell after a break): 4; thread 1 runs [5,10) (7, and 5 mid-cell) and [15,20)
+  // (15 mid-cell): 3.
+  const ScheduleOutcome two = simulate_schedule(work, 2, {ScheduleKind::kStatic, 5});
+  EXPECT_EQ(two.threads[0].builds, 4u);
+  EXPECT_EQ(two.threads[1].builds, 3u);
+  EXPECT_EQ(two.threads[0].homes, 10u);
+}
+
+// A cell loop over five cells, three empty: empty cells cost an iteration, no home, no build,
+// even where a chunk starts on them.
+TEST(CostModel, CellLoopPaysHomesAndBuildsOnlyForOccupiedCells) {
+  const std::vector<std::uint32_t> tests{0, 6, 0, 0, 12};
+  const std::vector<std::uint32_t> homes{0, 3, 0, 0, 4};
+  const std::vector<std::uint8_t> builds{0, 1, 0, 0, 1};
+  const ScheduleOutcome outcome =
+      simulate_schedule(WorkView(tests, homes, builds), 2, {ScheduleKind::kStatic, 1});
+  EXPECT_EQ(outcome.threads[0].iterations, 3u);  // cells 0, 2, 4
+  EXPECT_EQ(outcome.threads[0].homes, 4u);
+  EXPECT_EQ(outcome.threads[0].builds, 1u);
+  EXPECT_EQ(outcome.threads[1].homes, 3u);  // cells 1, 3
+  EXPECT_EQ(outcome.threads[1].builds, 1u);
+  EXPECT_THROW(WorkView(tests, std::vector<std::uint32_t>(4, 1), builds), std::invalid_argument);
 }
 
 TEST(CostModel, ChunkSequenceRepeatsItsLastSize) {

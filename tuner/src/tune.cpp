@@ -4,11 +4,13 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <array>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <numeric>
 #include <random>
+#include <utility>
 
 #include "contactlab/kernels/atomic_file.hpp"
 #include "contactlab/kernels/detector.hpp"
@@ -27,6 +29,11 @@ namespace {
 using nlohmann::json;
 
 const Variant kReference = parse_variant("particle/sorted/half/static");
+// Timed runs per calibration point; their median is fitted (a single run on a shared VM can
+// take twice as long when a vCPU is stolen).
+constexpr int kCalibrationSamples = 5;
+
+WorkView view_of(const LoopWork& work) { return {work.tests, work.homes, work.builds}; }
 
 std::vector<Variant> structures_of(const TuneOptions& options) {
   std::vector<Variant> result;
@@ -69,25 +76,30 @@ std::string machine_key() {
   return fmt::format("{}|{} cpus|{}|{}", m.cpu_model, m.pus, b.flags, b.git_commit);
 }
 
+// The cost model's constants by name, for the cache file. A calibration stored by a model with
+// other constants (another kCostModelVersion) is a cache miss.
+constexpr int kCostModelVersion = 2;
+constexpr std::array<std::pair<const char*, double MachineCosts::*>, 9> kCostFields{{
+    {"seconds_per_test", &MachineCosts::seconds_per_test},
+    {"seconds_per_iteration", &MachineCosts::seconds_per_iteration},
+    {"seconds_per_home", &MachineCosts::seconds_per_home},
+    {"seconds_per_build", &MachineCosts::seconds_per_build},
+    {"seconds_per_static_chunk", &MachineCosts::seconds_per_static_chunk},
+    {"seconds_per_grab", &MachineCosts::seconds_per_grab},
+    {"seconds_per_stream_break", &MachineCosts::seconds_per_stream_break},
+    {"seconds_per_cold_test", &MachineCosts::seconds_per_cold_test},
+    {"seconds_per_region", &MachineCosts::seconds_per_region},
+}};
+
 json costs_json(const MachineCosts& c) {
-  return {{"seconds_per_test", c.seconds_per_test},
-          {"seconds_per_iteration", c.seconds_per_iteration},
-          {"seconds_per_static_chunk", c.seconds_per_static_chunk},
-          {"seconds_per_grab", c.seconds_per_grab},
-          {"seconds_per_stream_break", c.seconds_per_stream_break},
-          {"seconds_per_cold_test", c.seconds_per_cold_test},
-          {"seconds_per_region", c.seconds_per_region}};
+  json j;
+  for (const auto& [name, field] : kCostFields) j[name] = c.*field;
+  return j;
 }
 
 MachineCosts costs_from_json(const json& j) {
   MachineCosts c;
-  c.seconds_per_test = j.at("seconds_per_test").get<double>();
-  c.seconds_per_iteration = j.at("seconds_per_iteration").get<double>();
-  c.seconds_per_static_chunk = j.at("seconds_per_static_chunk").get<double>();
-  c.seconds_per_grab = j.at("seconds_per_grab").get<double>();
-  c.seconds_per_stream_break = j.at("seconds_per_stream_break").get<double>();
-  c.seconds_per_cold_test = j.at("seconds_per_cold_test").get<double>();
-  c.seconds_per_region = j.at("seconds_per_region").get<double>();
+  for (const auto& [name, field] : kCostFields) c.*field = j.at(name).get<double>();
   return c;
 }
 
@@ -98,7 +110,7 @@ struct ModelChoice {
   std::vector<CandidatePrediction> candidates;  // of the chosen kind
 };
 
-ModelChoice model_choice(const Variant& structure, std::span<const std::uint32_t> work, int threads,
+ModelChoice model_choice(const Variant& structure, WorkView work, int threads,
                          const MachineCosts& costs, const std::vector<int>& grid) {
   ModelChoice best;
   best.predicted_s = std::numeric_limits<double>::infinity();
@@ -117,9 +129,9 @@ ModelChoice model_choice(const Variant& structure, std::span<const std::uint32_t
 // contenders, taken round by round in a new random order each round (fixed seed).
 struct Verification {
   std::vector<Variant> distinct;
-  std::vector<std::size_t> of_contender;       // contender -> index into distinct
-  std::vector<std::vector<double>> samples;    // per distinct variant, one per round
-  std::size_t best = 0;                        // distinct variant with the fastest paired ratio
+  std::vector<std::size_t> of_contender;     // contender -> index into distinct
+  std::vector<std::vector<double>> samples;  // per distinct variant, one per round
+  std::size_t best = 0;                      // distinct variant with the fastest paired ratio
 
   const std::vector<double>& samples_of(std::size_t contender) const {
     return samples[of_contender[contender]];
@@ -176,44 +188,58 @@ std::string structure_key(const Variant& variant) {
 
 Calibration calibrate_machine(const TuneOptions& options, int threads) {
   const double start = omp_get_wtime();
-  // Two sizes of one clustered scene, so that time per test and fixed costs separate; small
-  // enough to calibrate in seconds (a 99^3 grid keeps the cell loop's simulation cheap), dense
-  // enough that pair tests dominate as on the scenes tuned.
-  std::vector<Scene> scenes;
-  for (const std::uint64_t n : {40'000u, 120'000u}) {
+  // Two sizes of one dense clustered scene, timed under schedules that exercise every cost
+  // term, separate time per pair test from the fixed costs. A sparse uniform scene (about 0.1
+  // particles per cell, few tests per particle) identifies the costs of homes and of
+  // neighbour-range builds in a grid larger than the caches, which dominate sparse scenes and
+  // which dense scenes alone leave free; block, block-cyclic and dynamic suffice there. Each
+  // is small enough to calibrate in seconds.
+  const std::vector<Schedule> every_term{{ScheduleKind::kStatic, 0},  {ScheduleKind::kStatic, 1},
+                                         {ScheduleKind::kStatic, 64}, {ScheduleKind::kStatic, 4096},
+                                         {ScheduleKind::kDynamic, 1}, {ScheduleKind::kDynamic, 64},
+                                         {ScheduleKind::kGuided, 64}};
+  const std::vector<Schedule> sparse_terms{
+      {ScheduleKind::kStatic, 0}, {ScheduleKind::kStatic, 64}, {ScheduleKind::kDynamic, 64}};
+  struct CalibrationScene {
+    Scene scene;
+    double diameter;
+    const std::vector<Schedule>& schedules;
+  };
+  std::vector<CalibrationScene> scenes;
+  auto add_scene = [&](SceneKind kind, std::uint64_t n, double diameter,
+                       const std::vector<Schedule>& schedules) {
     SceneSpec spec;
-    spec.kind = SceneKind::kClustered;
+    spec.kind = kind;
     spec.n = n;
-    spec.diameter = 1.0 / 100.0;
-    scenes.push_back(generate_scene(spec));
-  }
-  const double diameter = 1.0 / 100.0;
+    spec.diameter = diameter;
+    scenes.push_back({generate_scene(spec), diameter, schedules});
+  };
+  add_scene(SceneKind::kClustered, 40'000, 1.0 / 100.0, every_term);
+  add_scene(SceneKind::kClustered, 120'000, 1.0 / 100.0, every_term);
+  add_scene(SceneKind::kUniform, 300'000, 1.0 / 150.0, sparse_terms);
   ContactDetector detector;
   Calibration calibration;
   calibration.source = "calibrated now";
   calibration.threads = threads;
-  const std::vector<Schedule> schedules{{ScheduleKind::kStatic, 0},  {ScheduleKind::kStatic, 1},
-                                        {ScheduleKind::kStatic, 64}, {ScheduleKind::kStatic, 4096},
-                                        {ScheduleKind::kDynamic, 1}, {ScheduleKind::kDynamic, 64},
-                                        {ScheduleKind::kGuided, 64}};
   std::vector<int> thread_counts{1};
   if (threads > 1) thread_counts.push_back(threads);
   for (const Variant& structure : structures_of(options)) {
-    std::vector<std::vector<std::uint32_t>> works;  // kept alive: TimedRun holds spans
-    for (const Scene& scene : scenes) {
+    std::vector<LoopWork> works;  // kept alive: TimedRun holds views
+    for (const CalibrationScene& c : scenes) {
       works.push_back(
-          detector.iteration_work(scene, DetectOptions{structure, diameter, 1, nullptr}));
+          detector.iteration_work(c.scene, DetectOptions{structure, c.diameter, 1, nullptr}));
     }
     std::vector<TimedRun> runs;
     for (std::size_t s = 0; s < scenes.size(); ++s) {
       for (const int t : thread_counts) {
-        for (const Schedule& schedule : schedules) {
+        for (const Schedule& schedule : scenes[s].schedules) {
           Variant v = structure;
           v.schedule = schedule;
-          const DetectOptions options_now{v, diameter, t, nullptr};
-          detector.run(scenes[s], options_now);  // warm-up
-          runs.push_back(
-              {works[s], t, schedule, median(detect_samples(detector, scenes[s], options_now, 3))});
+          const DetectOptions options_now{v, scenes[s].diameter, t, nullptr};
+          detector.run(scenes[s].scene, options_now);  // warm-up
+          runs.push_back({view_of(works[s]), t, schedule,
+                          median(detect_samples(detector, scenes[s].scene, options_now,
+                                                kCalibrationSamples))});
         }
       }
     }
@@ -252,7 +278,7 @@ TuneReport tune(const Scene& scene, const SceneRecord& scene_record, double diam
   const double model_start = omp_get_wtime();
   struct Structure {
     Variant variant;
-    std::vector<std::uint32_t> work;
+    LoopWork work;
     MachineCosts costs;
     ModelChoice model;
   };
@@ -267,7 +293,7 @@ TuneReport tune(const Scene& scene, const SceneRecord& scene_record, double diam
         detector.iteration_work(scene, DetectOptions{structure, diameter, threads, nullptr}),
         costs,
         {}};
-    s.model = model_choice(structure, s.work, threads, costs, options.chunk_grid);
+    s.model = model_choice(structure, view_of(s.work), threads, costs, options.chunk_grid);
     model_table.push_back(
         {{"variant", to_string(s.model.variant)}, {"predicted_s", s.model.predicted_s}});
     structures.push_back(std::move(s));
@@ -292,8 +318,8 @@ TuneReport tune(const Scene& scene, const SceneRecord& scene_record, double diam
   // Other thread counts, from the model's structure.
   json predictions = json::array();
   for (const int p : options.predict_threads) {
-    const ModelChoice m = model_choice(model_best->variant, model_best->work, p, model_best->costs,
-                                       options.chunk_grid);
+    const ModelChoice m = model_choice(model_best->variant, view_of(model_best->work), p,
+                                       model_best->costs, options.chunk_grid);
     predictions.push_back(
         {{"threads", p},
          {"variant", to_string(m.variant)},
@@ -306,8 +332,10 @@ TuneReport tune(const Scene& scene, const SceneRecord& scene_record, double diam
   // Classic formulas for the structure that is tuned (the model's here, the search's below).
   auto classic_report = [&](const Structure& structure) {
     json classic = json::array();
-    for (const NamedChunk& c : classic_chunks(structure.work, threads, structure.costs)) {
-      classic.push_back({{"name", c.name}, {"chunk", c.chunk}, {"inputs", c.inputs},
+    for (const NamedChunk& c : classic_chunks(view_of(structure.work), threads, structure.costs)) {
+      classic.push_back({{"name", c.name},
+                         {"chunk", c.chunk},
+                         {"inputs", c.inputs},
                          {"structure", structure_key(structure.variant)}});
     }
     return classic;
@@ -512,7 +540,10 @@ void TuningCache::save(const json& document) const {
 std::optional<Calibration> TuningCache::calibration() const {
   const json document = load();
   const auto it = document["calibrations"].find(machine_key());
-  if (it == document["calibrations"].end()) return std::nullopt;
+  if (it == document["calibrations"].end() ||
+      it->value("cost_model_version", 1) != kCostModelVersion) {
+    return std::nullopt;
+  }
   Calibration c;
   c.source = "cache";
   c.seconds = it->at("seconds").get<double>();
@@ -532,7 +563,8 @@ void TuningCache::store_calibration(const Calibration& calibration) {
                        {"rms_relative_error", s.rms_relative_error},
                        {"runs", s.runs}};
   }
-  document["calibrations"][machine_key()] = {{"seconds", calibration.seconds},
+  document["calibrations"][machine_key()] = {{"cost_model_version", kCostModelVersion},
+                                             {"seconds", calibration.seconds},
                                              {"threads", calibration.threads},
                                              {"structures", structures}};
   save(document);

@@ -45,22 +45,33 @@ std::vector<std::uint64_t> factoring_batches(std::uint64_t iterations, int threa
 
 }  // namespace
 
-IterationTimeStatistics iteration_time_statistics(std::span<const std::uint32_t> work,
-                                                  const MachineCosts& costs) {
+IterationTimeStatistics iteration_time_statistics(WorkView work, const MachineCosts& costs) {
   IterationTimeStatistics stats;
   stats.iterations = work.size();
-  if (work.empty()) return stats;
-  double sum = 0.0;
-  for (const std::uint32_t tests : work) sum += tests;
-  stats.mean_tests = sum / static_cast<double>(work.size());
-  double squares = 0.0;
-  for (const std::uint32_t tests : work) {
-    const double deviation = static_cast<double>(tests) - stats.mean_tests;
-    squares += deviation * deviation;
+  if (work.size() == 0) return stats;
+  auto seconds_of = [&](std::size_t i) {
+    const double homes = work.homes.empty() ? 1.0 : work.homes[i];
+    const double builds = work.builds.empty() ? 1.0 : work.builds[i];
+    return costs.seconds_per_iteration + homes * costs.seconds_per_home +
+           builds * costs.seconds_per_build + work.tests[i] * costs.seconds_per_test;
+  };
+  const auto m = static_cast<double>(work.size());
+  double tests_sum = 0.0, seconds_sum = 0.0;
+  for (std::size_t i = 0; i < work.size(); ++i) {
+    tests_sum += work.tests[i];
+    seconds_sum += seconds_of(i);
   }
-  stats.stddev_tests = std::sqrt(squares / static_cast<double>(work.size()));
-  stats.mean_seconds = costs.seconds_per_iteration + stats.mean_tests * costs.seconds_per_test;
-  stats.stddev_seconds = stats.stddev_tests * costs.seconds_per_test;
+  stats.mean_tests = tests_sum / m;
+  stats.mean_seconds = seconds_sum / m;
+  double tests_squares = 0.0, seconds_squares = 0.0;
+  for (std::size_t i = 0; i < work.size(); ++i) {
+    const double tests = static_cast<double>(work.tests[i]) - stats.mean_tests;
+    const double seconds = seconds_of(i) - stats.mean_seconds;
+    tests_squares += tests * tests;
+    seconds_squares += seconds * seconds;
+  }
+  stats.stddev_tests = std::sqrt(tests_squares / m);
+  stats.stddev_seconds = std::sqrt(seconds_squares / m);
   return stats;
 }
 
@@ -82,8 +93,7 @@ int kruskal_weiss_chunk(std::uint64_t iterations, int threads, double overhead_s
   return to_chunk(static_cast<std::uint64_t>(std::llround(std::max(k, 1.0))));
 }
 
-int kruskal_weiss_chunk(std::span<const std::uint32_t> work, int threads,
-                        const MachineCosts& costs) {
+int kruskal_weiss_chunk(WorkView work, int threads, const MachineCosts& costs) {
   const IterationTimeStatistics stats = iteration_time_statistics(work, costs);
   return kruskal_weiss_chunk(work.size(), threads, costs.seconds_per_grab, stats.stddev_seconds);
 }
@@ -138,8 +148,7 @@ int eighth_block_chunk(std::uint64_t iterations, int threads) {
   return to_chunk(ceil_div(iterations, 8 * static_cast<std::uint64_t>(threads)));
 }
 
-std::vector<NamedChunk> classic_chunks(std::span<const std::uint32_t> work, int threads,
-                                       const MachineCosts& costs) {
+std::vector<NamedChunk> classic_chunks(WorkView work, int threads, const MachineCosts& costs) {
   check_threads("classic_chunks", threads);
   const IterationTimeStatistics stats = iteration_time_statistics(work, costs);
   const std::uint64_t n = work.size();

@@ -11,18 +11,18 @@ namespace contactlab::tuner {
 
 namespace {
 
-constexpr std::size_t kConstants = 7;
+constexpr std::size_t kConstants = 9;
 using Vector = std::array<double, kConstants>;
 
 constexpr std::array<const char*, kConstants> kConstantNames = {
-    "seconds_per_region",       "seconds_per_test", "seconds_per_iteration",
-    "seconds_per_static_chunk", "seconds_per_grab", "seconds_per_stream_break",
-    "seconds_per_cold_test"};
+    "seconds_per_region", "seconds_per_test",         "seconds_per_iteration",
+    "seconds_per_home",   "seconds_per_build",        "seconds_per_static_chunk",
+    "seconds_per_grab",   "seconds_per_stream_break", "seconds_per_cold_test"};
 
 Vector to_vector(const MachineCosts& costs) {
-  return {costs.seconds_per_region,       costs.seconds_per_test, costs.seconds_per_iteration,
-          costs.seconds_per_static_chunk, costs.seconds_per_grab, costs.seconds_per_stream_break,
-          costs.seconds_per_cold_test};
+  return {costs.seconds_per_region, costs.seconds_per_test,         costs.seconds_per_iteration,
+          costs.seconds_per_home,   costs.seconds_per_build,        costs.seconds_per_static_chunk,
+          costs.seconds_per_grab,   costs.seconds_per_stream_break, costs.seconds_per_cold_test};
 }
 
 MachineCosts to_costs(const Vector& v) {
@@ -30,10 +30,12 @@ MachineCosts to_costs(const Vector& v) {
   costs.seconds_per_region = v[0];
   costs.seconds_per_test = v[1];
   costs.seconds_per_iteration = v[2];
-  costs.seconds_per_static_chunk = v[3];
-  costs.seconds_per_grab = v[4];
-  costs.seconds_per_stream_break = v[5];
-  costs.seconds_per_cold_test = v[6];
+  costs.seconds_per_home = v[3];
+  costs.seconds_per_build = v[4];
+  costs.seconds_per_static_chunk = v[5];
+  costs.seconds_per_grab = v[6];
+  costs.seconds_per_stream_break = v[7];
+  costs.seconds_per_cold_test = v[8];
   return costs;
 }
 
@@ -42,6 +44,8 @@ Vector features(const ThreadShare& share, bool self_scheduled) {
   return {1.0,
           static_cast<double>(share.tests),
           static_cast<double>(share.iterations),
+          static_cast<double>(share.homes),
+          static_cast<double>(share.builds),
           self_scheduled ? 0.0 : static_cast<double>(share.chunks),
           static_cast<double>(share.grabs),
           static_cast<double>(share.stream_breaks),
@@ -99,7 +103,7 @@ std::optional<std::vector<double>> least_squares(const std::vector<Vector>& a,
 }
 
 // Non-negative least squares by enumeration of the supports: the NNLS optimum is the
-// unconstrained fit on its support, and with at most 7 constants the 127 supports are cheap
+// unconstrained fit on its support, and with at most 9 constants the 511 supports are cheap
 // and the answer exact (no active-set cycling to guard against).
 Vector nonnegative_least_squares(const std::vector<Vector>& a, const std::vector<double>& b,
                                  const std::array<bool, kConstants>& usable) {
@@ -200,24 +204,47 @@ CalibrationResult calibrate_costs(std::span<const TimedRun> runs, const MachineC
   int stale = 0;
   bool settled = false;
 
-  // Round r simulates every run once under `current`: that scores the previous fit and gives
-  // the critical threads for the next one.
+  // What each thread does depends on the costs only where threads race for chunks (dynamic or
+  // guided with more than one thread); the other runs are simulated once.
+  auto races = [](const TimedRun& run) {
+    return run.threads > 1 && run.schedule.kind != ScheduleKind::kStatic;
+  };
+  std::vector<ScheduleOutcome> fixed(runs.size());
+  for (std::size_t i = 0; i < runs.size(); ++i) {
+    if (!races(runs[i])) {
+      fixed[i] = simulate_schedule(runs[i].work, runs[i].threads, runs[i].schedule);
+    }
+  }
+
+  // Round r simulates every racing run once under `current`: that scores the previous fit and
+  // gives the critical threads for the next one.
   for (int round = 0;; ++round) {
     // Rows: the critical thread's coefficients, divided by the measured time so that the fit
     // minimises relative errors.
     std::vector<Vector> rows;
     Errors errors;
     identified.fill(false);
-    for (const TimedRun& run : runs) {
+    for (std::size_t i = 0; i < runs.size(); ++i) {
+      const TimedRun& run = runs[i];
       const ScheduleOutcome outcome =
-          simulate_schedule(run.work, run.threads, run.schedule, to_costs(current));
-      const double error = (outcome.makespan_seconds - run.seconds) / run.seconds;
+          races(run) ? simulate_schedule(run.work, run.threads, run.schedule, to_costs(current))
+                     : ScheduleOutcome{};
+      const ScheduleOutcome& shares = races(run) ? outcome : fixed[i];
+      // The critical thread and the loop's time under `current` (region included in both).
+      Vector row{};
+      double predicted = -1.0;
+      for (const ThreadShare& share : shares.threads) {
+        const Vector f = features(share, shares.self_scheduled);
+        double seconds = 0.0;
+        for (std::size_t j = 0; j < kConstants; ++j) seconds += f[j] * current[j];
+        if (seconds > predicted) {
+          predicted = seconds;
+          row = f;
+        }
+      }
+      const double error = (predicted - run.seconds) / run.seconds;
       errors.rms += error * error;
       errors.max = std::max(errors.max, std::abs(error));
-      const auto critical = std::max_element(
-          outcome.threads.begin(), outcome.threads.end(),
-          [](const ThreadShare& a, const ThreadShare& b) { return a.seconds < b.seconds; });
-      Vector row = features(*critical, outcome.self_scheduled);
       for (std::size_t j = 0; j < kConstants; ++j) {
         identified[j] = identified[j] || row[j] != 0.0;
         row[j] /= run.seconds;

@@ -31,27 +31,40 @@ void check_schedule(const char* function, const Schedule& schedule) {
   }
 }
 
-// Prefix sums of a work vector, in one buffer per thread reused by every simulation: a fresh
-// one per simulation of an 8-million-cell loop costs a 64 MB allocation and its page faults,
-// far more than the simulation itself. Simulations do not nest, so one buffer suffices.
-std::vector<std::uint64_t>& prefix_buffer(std::span<const std::uint32_t> work) {
-  thread_local std::vector<std::uint64_t> prefix;
-  prefix.resize(work.size() + 1);
+// Prefix sums of the work's counts, in buffers per thread reused by every simulation: fresh
+// ones per simulation of an 8-million-cell loop cost 64 MB allocations and their page faults,
+// far more than the simulation itself. Simulations do not nest, so one set suffices.
+struct Prefixes {
+  std::vector<std::uint64_t> tests, homes, builds;  // homes/builds stay empty: 1 each
+};
+
+template <class Count>
+void prefix_sums(std::span<const Count> counts, std::vector<std::uint64_t>& prefix) {
+  prefix.resize(counts.size() + 1);
   prefix[0] = 0;
-  for (std::size_t i = 0; i < work.size(); ++i) prefix[i + 1] = prefix[i] + work[i];
-  return prefix;
+  for (std::size_t i = 0; i < counts.size(); ++i) prefix[i + 1] = prefix[i] + counts[i];
 }
 
-// Builds the per-thread shares chunk by chunk; prefix sums make a chunk's tests O(1).
+const Prefixes& prefix_buffers(const WorkView& work) {
+  thread_local Prefixes prefixes;
+  prefix_sums(work.tests, prefixes.tests);
+  prefixes.homes.clear();
+  prefixes.builds.clear();
+  if (!work.homes.empty()) prefix_sums(work.homes, prefixes.homes);
+  if (!work.builds.empty()) prefix_sums(work.builds, prefixes.builds);
+  return prefixes;
+}
+
+// Builds the per-thread shares chunk by chunk; prefix sums make a chunk's counts O(1).
 class ShareBuilder {
  public:
-  ShareBuilder(std::span<const std::uint32_t> work, int threads, const MachineCosts& costs,
-               bool self_scheduled, bool record_chunks)
+  ShareBuilder(const WorkView& work, int threads, const MachineCosts& costs, bool self_scheduled,
+               bool record_chunks)
       : work_(work),
         costs_(costs),
         self_scheduled_(self_scheduled),
         record_chunks_(record_chunks),
-        prefix_(prefix_buffer(work)),
+        prefix_(prefix_buffers(work)),
         last_end_(static_cast<std::size_t>(threads), kNoChunkYet) {
     outcome_.threads.resize(static_cast<std::size_t>(threads));
     outcome_.self_scheduled = self_scheduled;
@@ -62,12 +75,25 @@ class ShareBuilder {
   // Gives [begin, end) to `thread`; returns the chunk's seconds.
   double assign(int thread, std::uint64_t begin, std::uint64_t end) {
     ThreadShare& share = outcome_.threads[static_cast<std::size_t>(thread)];
-    const std::uint64_t tests = prefix_[end] - prefix_[begin];
     const std::uint64_t iterations = end - begin;
+    const std::uint64_t tests = prefix_.tests[end] - prefix_.tests[begin];
+    const std::uint64_t homes =
+        work_.homes.empty() ? iterations : prefix_.homes[end] - prefix_.homes[begin];
+    std::uint64_t builds =
+        work_.builds.empty() ? iterations : prefix_.builds[end] - prefix_.builds[begin];
     const bool breaks = last_end_[static_cast<std::size_t>(thread)] != begin;
-    const std::uint64_t cold = breaks && begin < end ? work_[begin] : 0;
+    std::uint64_t cold = 0;
+    if (breaks && begin < end) {
+      cold = work_.tests[begin];
+      // The thread's previous iteration was elsewhere: the first home builds its ranges anew.
+      const bool has_home = work_.homes.empty() || work_.homes[begin] > 0;
+      const bool builds_anyway = work_.builds.empty() || work_.builds[begin] != 0;
+      if (has_home && !builds_anyway) ++builds;
+    }
     share.tests += tests;
     share.iterations += iterations;
+    share.homes += homes;
+    share.builds += builds;
     share.chunks += 1;
     if (self_scheduled_) share.grabs += 1;
     if (breaks) {
@@ -79,6 +105,8 @@ class ShareBuilder {
     const double seconds =
         static_cast<double>(tests) * costs_.seconds_per_test +
         static_cast<double>(iterations) * costs_.seconds_per_iteration +
+        static_cast<double>(homes) * costs_.seconds_per_home +
+        static_cast<double>(builds) * costs_.seconds_per_build +
         (self_scheduled_ ? costs_.seconds_per_grab : costs_.seconds_per_static_chunk) +
         (breaks ? costs_.seconds_per_stream_break +
                       static_cast<double>(cold) * costs_.seconds_per_cold_test
@@ -113,17 +141,17 @@ class ShareBuilder {
   }
 
  private:
-  std::span<const std::uint32_t> work_;
+  WorkView work_;
   MachineCosts costs_;
   bool self_scheduled_;
   bool record_chunks_;
-  const std::vector<std::uint64_t>& prefix_;
+  const Prefixes& prefix_;
   std::vector<std::uint64_t> last_end_;  // where each thread's previous chunk ended
   ScheduleOutcome outcome_;
 };
 
-ScheduleOutcome simulate_static(std::span<const std::uint32_t> work, int threads, int chunk,
-                                const MachineCosts& costs, bool record_chunks) {
+ScheduleOutcome simulate_static(WorkView work, int threads, int chunk, const MachineCosts& costs,
+                                bool record_chunks) {
   ShareBuilder builder(work, threads, costs, false, record_chunks);
   const std::uint64_t m = work.size();
   const auto p = static_cast<std::uint64_t>(threads);
@@ -148,9 +176,8 @@ ScheduleOutcome simulate_static(std::span<const std::uint32_t> work, int threads
 // Greedy self-scheduling: the next chunk goes to the thread whose clock is lowest (ties: fewer
 // chunks taken, then lowest id). next_size(remaining) gives the next chunk's size.
 template <class NextSize>
-ScheduleOutcome simulate_self_scheduled(std::span<const std::uint32_t> work, int threads,
-                                        NextSize next_size, const MachineCosts& costs,
-                                        bool record_chunks) {
+ScheduleOutcome simulate_self_scheduled(WorkView work, int threads, NextSize next_size,
+                                        const MachineCosts& costs, bool record_chunks) {
   ShareBuilder builder(work, threads, costs, true, record_chunks);
   using Clock = std::tuple<double, std::uint64_t, int>;  // free at, chunks taken, thread id
   std::priority_queue<Clock, std::vector<Clock>, std::greater<>> free_threads;
@@ -182,10 +209,23 @@ std::uint64_t guided_next_size(std::uint64_t remaining, std::uint64_t threads,
 
 }  // namespace
 
+WorkView::WorkView(std::span<const std::uint32_t> tests_, std::span<const std::uint32_t> homes_,
+                   std::span<const std::uint8_t> builds_)
+    : tests(tests_), homes(homes_), builds(builds_) {
+  if ((!homes.empty() && homes.size() != tests.size()) ||
+      (!builds.empty() && builds.size() != tests.size())) {
+    throw std::invalid_argument("WorkView: " + std::to_string(tests.size()) + " iterations but " +
+                                std::to_string(homes.size()) + " home counts and " +
+                                std::to_string(builds.size()) + " build flags");
+  }
+}
+
 MachineCosts MachineCosts::tests_only() {
   MachineCosts costs;
   costs.seconds_per_test = 1.0;
   costs.seconds_per_iteration = 0.0;
+  costs.seconds_per_home = 0.0;
+  costs.seconds_per_build = 0.0;
   costs.seconds_per_static_chunk = 0.0;
   costs.seconds_per_grab = 0.0;
   costs.seconds_per_stream_break = 0.0;
@@ -194,9 +234,8 @@ MachineCosts MachineCosts::tests_only() {
   return costs;
 }
 
-ScheduleOutcome simulate_schedule(std::span<const std::uint32_t> work, int threads,
-                                  const Schedule& schedule, const MachineCosts& costs,
-                                  bool record_chunks) {
+ScheduleOutcome simulate_schedule(WorkView work, int threads, const Schedule& schedule,
+                                  const MachineCosts& costs, bool record_chunks) {
   check_threads("simulate_schedule", threads);
   check_schedule("simulate_schedule", schedule);
   const auto chunk = static_cast<std::uint64_t>(schedule.chunk);
@@ -216,7 +255,7 @@ ScheduleOutcome simulate_schedule(std::span<const std::uint32_t> work, int threa
   throw std::invalid_argument("simulate_schedule: unknown schedule kind");
 }
 
-ScheduleOutcome simulate_chunk_sequence(std::span<const std::uint32_t> work, int threads,
+ScheduleOutcome simulate_chunk_sequence(WorkView work, int threads,
                                         std::span<const std::uint64_t> chunk_sizes,
                                         const MachineCosts& costs, bool record_chunks) {
   check_threads("simulate_chunk_sequence", threads);
@@ -258,8 +297,7 @@ std::vector<std::uint64_t> self_scheduling_chunk_sizes(std::uint64_t iterations,
   return sizes;
 }
 
-std::vector<std::uint64_t> thread_tests(std::span<const std::uint32_t> work, int threads,
-                                        const Schedule& schedule) {
+std::vector<std::uint64_t> thread_tests(WorkView work, int threads, const Schedule& schedule) {
   const ScheduleOutcome outcome =
       simulate_schedule(work, threads, schedule, MachineCosts::tests_only());
   std::vector<std::uint64_t> tests;
@@ -295,8 +333,8 @@ std::vector<int> log2_chunk_grid(int largest_chunk) {
   return grid;
 }
 
-ChunkPrediction predict_best_chunk(std::span<const std::uint32_t> work, int threads,
-                                   ScheduleKind kind, const MachineCosts& costs,
+ChunkPrediction predict_best_chunk(WorkView work, int threads, ScheduleKind kind,
+                                   const MachineCosts& costs,
                                    std::span<const int> candidate_chunks) {
   check_threads("predict_best_chunk", threads);
   if (candidate_chunks.empty()) {

@@ -78,16 +78,26 @@ struct DetectRun {
   int threads = 0;
 };
 
+// The work of each iteration of a detection loop, in loop order (one entry per iteration).
+struct LoopWork {
+  std::vector<std::uint32_t> tests;  // pair tests
+  std::vector<std::uint32_t> homes;  // home particles visited: cell loop, the occupancy; else 1
+  // 1 where the iteration builds the stencil's neighbour ranges when its thread ran the
+  // previous iteration too: cell loop, every occupied cell; particle loop, a particle whose
+  // cell differs from the previous particle's (ranges are reused within a cell).
+  std::vector<std::uint8_t> builds;
+};
+
 class ContactDetector {
  public:
   // Throws InputError for D <= 0 (without per-particle diameters) or an invalid schedule.
   DetectRun run(const Scene& scene, const DetectOptions& options);
 
-  // The pair tests each iteration of the variant's parallel loop will make (a particle, or a
-  // cell with all its particles), in loop order: the exact work a schedule distributes among
-  // threads, known from the cell occupancy before any pair is tested. The tuner's zero-run
-  // model reads it. Costs one registration and a pass over the stencils.
-  std::vector<std::uint32_t> iteration_work(const Scene& scene, const DetectOptions& options);
+  // What each iteration of the variant's parallel loop (a particle, or a cell with all its
+  // particles) will do, in loop order: the exact work a schedule distributes among threads,
+  // known from the cell occupancy before any pair is tested. The tuner's zero-run model reads
+  // it. Costs one registration and a pass over the stencils.
+  LoopWork iteration_work(const Scene& scene, const DetectOptions& options);
 
   // Contacts of the last run in working ids (see working_to_input()).
   const ContactList& contacts() const { return contacts_; }

@@ -11,8 +11,9 @@
 
 namespace contactlab::tuner {
 
-// Mean and spread of one iteration's time, from the work vector and the calibrated costs:
-// time_i = seconds_per_iteration + work_i * seconds_per_test.
+// Mean and spread of one iteration's time, from the work and the calibrated costs:
+// time_i = seconds_per_iteration + homes_i * seconds_per_home + builds_i * seconds_per_build
+//          + tests_i * seconds_per_test.
 struct IterationTimeStatistics {
   std::uint64_t iterations = 0;
   double mean_tests = 0.0;
@@ -20,8 +21,7 @@ struct IterationTimeStatistics {
   double mean_seconds = 0.0;
   double stddev_seconds = 0.0;
 };
-IterationTimeStatistics iteration_time_statistics(std::span<const std::uint32_t> work,
-                                                  const MachineCosts& costs);
+IterationTimeStatistics iteration_time_statistics(WorkView work, const MachineCosts& costs);
 
 // Kruskal & Weiss (1985), fixed-size chunking for self-scheduling:
 //   k = (sqrt(2) * N * h / (sigma * P * sqrt(ln P)))^(2/3)
@@ -32,8 +32,7 @@ IterationTimeStatistics iteration_time_statistics(std::span<const std::uint32_t>
 int kruskal_weiss_chunk(std::uint64_t iterations, int threads, double overhead_seconds,
                         double sigma_seconds);
 // The same with h = costs.seconds_per_grab and sigma from iteration_time_statistics().
-int kruskal_weiss_chunk(std::span<const std::uint32_t> work, int threads,
-                        const MachineCosts& costs);
+int kruskal_weiss_chunk(WorkView work, int threads, const MachineCosts& costs);
 
 // Factoring (Hummel, Schonberg & Flynn 1992): chunks are handed out in batches of P equal
 // chunks; with R iterations left at the batch start, each chunk is ceil(R / (x * P)).
@@ -69,7 +68,6 @@ struct NamedChunk {
 };
 
 // Every formula above for this loop, in that order.
-std::vector<NamedChunk> classic_chunks(std::span<const std::uint32_t> work, int threads,
-                                       const MachineCosts& costs);
+std::vector<NamedChunk> classic_chunks(WorkView work, int threads, const MachineCosts& costs);
 
 }  // namespace contactlab::tuner

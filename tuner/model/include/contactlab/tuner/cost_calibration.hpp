@@ -14,7 +14,7 @@ namespace contactlab::tuner {
 // One measured detection loop.
 struct TimedRun {
   // iteration_work() of the variant that was run; not owned: the caller keeps it alive.
-  std::span<const std::uint32_t> work;
+  WorkView work;
   int threads = 1;
   Schedule schedule;
   double seconds = 0.0;  // detection time T_c (a median of repetitions), without setup T_s
@@ -37,9 +37,10 @@ struct CalibrationResult {
 // and of 10 s weigh alike), with Huber weights so that a disturbed run cannot drag the fit;
 // repeat until the costs settle. Starts from `fallback`.
 // To identify every constant, include: several thread counts, 1 thread with a small static
-// chunk (separates per-chunk cost from break cost), dynamic or guided runs (grabs), and both
-// small and large chunks. Throws std::invalid_argument for no runs, a run with threads < 1,
-// seconds <= 0 or not finite, or an invalid schedule.
+// chunk (separates per-chunk cost from break cost), dynamic or guided runs (grabs), both
+// small and large chunks, and scenes where homes, builds and iterations are not proportional
+// (dense cells beside sparse ones; empty cells in a cell loop). Throws std::invalid_argument for no
+// runs, a run with threads < 1, seconds <= 0 or not finite, or an invalid schedule.
 CalibrationResult calibrate_costs(std::span<const TimedRun> runs,
                                   const MachineCosts& fallback = MachineCosts{});
 

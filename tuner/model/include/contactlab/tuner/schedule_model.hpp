@@ -12,11 +12,37 @@
 
 namespace contactlab::tuner {
 
+// The loop's work, iteration by iteration (ContactDetector::iteration_work): what the cost
+// model counts. Views, not owned.
+struct WorkView {
+  std::span<const std::uint32_t> tests;  // pair tests of each iteration
+  // Home particles each iteration visits (cell loop: the cell's occupancy, 0 for an empty
+  // cell; particle loop: 1). Empty span: 1 per iteration.
+  std::span<const std::uint32_t> homes;
+  // 1 where the iteration builds the stencil's neighbour ranges when it continues its
+  // thread's previous iteration (cell loop: every occupied cell; particle loop: the first
+  // particle of each cell), else 0. Empty span: 1 per iteration. The first iteration of a
+  // chunk that does not continue its thread's stream builds whenever it has a home.
+  std::span<const std::uint8_t> builds;
+
+  WorkView() = default;
+  // Tests alone: every iteration one home, one build (a particle loop in input order).
+  WorkView(std::span<const std::uint32_t> tests_only) : tests(tests_only) {}     // NOLINT
+  WorkView(const std::vector<std::uint32_t>& tests_only) : tests(tests_only) {}  // NOLINT
+  WorkView(std::span<const std::uint32_t> tests_, std::span<const std::uint32_t> homes_,
+           std::span<const std::uint8_t> builds_);  // throws for sizes other than tests'
+
+  std::size_t size() const { return tests.size(); }
+};
+
 // Constants of the time model for one machine and one loop/order/stencil kind (a pair test in
 // input order costs more than one in cell order, so each kind gets its own calibration).
 // A thread's busy time is
 //     tests         * seconds_per_test          (the pair tests of its iterations)
-//   + iterations    * seconds_per_iteration     (per-iteration setup: neighbour ranges)
+//   + iterations    * seconds_per_iteration     (loop step: an empty cell's check)
+//   + homes         * seconds_per_home          (a home particle's setup and result row)
+//   + builds        * seconds_per_build         (neighbour ranges: lookups in the cell index,
+//                                                which dominate sparse scenes)
 //   + static_chunks * seconds_per_static_chunk  (static,k: bounds of the next chunk)
 //   + grabs         * seconds_per_grab          (dynamic/guided: atomic on the shared counter)
 //   + stream_breaks * seconds_per_stream_break  (a chunk that does not continue the last one)
@@ -25,7 +51,9 @@ namespace contactlab::tuner {
 // for the slowest thread).
 struct MachineCosts {
   double seconds_per_test = 2e-9;
-  double seconds_per_iteration = 2e-8;
+  double seconds_per_iteration = 2e-9;
+  double seconds_per_home = 1e-8;
+  double seconds_per_build = 5e-8;
   // static,k needs no synchronisation: a thread computes its next chunk's bounds itself.
   double seconds_per_static_chunk = 5e-9;
   // dynamic/guided take every chunk from one shared counter (a compare-and-swap or fetch-add
@@ -52,6 +80,8 @@ struct MachineCosts {
 struct ThreadShare {
   std::uint64_t tests = 0;
   std::uint64_t iterations = 0;
+  std::uint64_t homes = 0;
+  std::uint64_t builds = 0;         // neighbour-range builds, the breaks' included
   std::uint64_t chunks = 0;         // chunks executed (static block: 1 when it has iterations)
   std::uint64_t grabs = 0;          // dynamic/guided: chunks + the final empty grab; static: 0
   std::uint64_t stream_breaks = 0;  // chunks not starting where this thread's previous ended
@@ -88,8 +118,7 @@ struct ScheduleOutcome {
 // thread that has taken fewer chunks, then the lowest id (so with tests_only() costs every
 // thread still starts with one chunk, as in a real run, even when chunks have no work).
 // Throws std::invalid_argument for threads < 1, chunk < 0, or chunk 0 with dynamic/guided.
-ScheduleOutcome simulate_schedule(std::span<const std::uint32_t> work, int threads,
-                                  const Schedule& schedule,
+ScheduleOutcome simulate_schedule(WorkView work, int threads, const Schedule& schedule,
                                   const MachineCosts& costs = MachineCosts::tests_only(),
                                   bool record_chunks = false);
 
@@ -97,7 +126,7 @@ ScheduleOutcome simulate_schedule(std::span<const std::uint32_t> work, int threa
 // has chunk_sizes[j] iterations (the last is cut at the loop's end; sizes past the end are
 // ignored; if the sizes run out before the end, the last size repeats). Priced as dynamic.
 // Throws std::invalid_argument for threads < 1, an empty sequence or a zero size.
-ScheduleOutcome simulate_chunk_sequence(std::span<const std::uint32_t> work, int threads,
+ScheduleOutcome simulate_chunk_sequence(WorkView work, int threads,
                                         std::span<const std::uint64_t> chunk_sizes,
                                         const MachineCosts& costs = MachineCosts::tests_only(),
                                         bool record_chunks = false);
@@ -110,8 +139,7 @@ std::vector<std::uint64_t> self_scheduling_chunk_sizes(std::uint64_t iterations,
                                                        const Schedule& schedule);
 
 // Pair tests per thread: simulate_schedule with tests_only() costs.
-std::vector<std::uint64_t> thread_tests(std::span<const std::uint32_t> work, int threads,
-                                        const Schedule& schedule);
+std::vector<std::uint64_t> thread_tests(WorkView work, int threads, const Schedule& schedule);
 
 // (max - mean) / max of per-thread loads: 0 when balanced, 1 - 1/P when one thread does all.
 // 0 for an empty span or all zeros.
@@ -138,8 +166,8 @@ struct ChunkPrediction {
 // Predicts the loop time of `kind` with every candidate chunk (0 = static block, static only)
 // and returns the fastest; equal predictions prefer the larger chunk (better locality).
 // Throws std::invalid_argument for no candidates or an invalid schedule.
-ChunkPrediction predict_best_chunk(std::span<const std::uint32_t> work, int threads,
-                                   ScheduleKind kind, const MachineCosts& costs,
+ChunkPrediction predict_best_chunk(WorkView work, int threads, ScheduleKind kind,
+                                   const MachineCosts& costs,
                                    std::span<const int> candidate_chunks);
 
 }  // namespace contactlab::tuner
