@@ -8,7 +8,10 @@ if(GIT_FOUND)
   if(NOT _rc EQUAL 0)
     set(COMMIT "unknown")
   endif()
+  # Dirty = the code differs from the commit. results/ is output, not code: results being
+  # regenerated in place must not mark the build that regenerates them.
   execute_process(COMMAND ${GIT_EXECUTABLE} -C ${SRC} status --porcelain --untracked-files=no
+                          -- . ":(exclude)results"
                   OUTPUT_VARIABLE _status ERROR_QUIET)
   if(_status)
     set(DIRTY "true")

@@ -394,13 +394,13 @@ int command_tune(const SceneOptions& scene_options, const TuneCommand& command,
   for (const auto& method : report.json["methods"]) {
     std::string measured = "not measured";
     if (method.contains("measured")) {
-      measured = fmt::format("measured T_c {:.4f} s [{:.4f}, {:.4f}]  regret {:+.1f}% [{:+.1f}, {:+.1f}]",
-                             method["measured"]["median_s"].get<double>(),
-                             method["measured"]["ci95_low_s"].get<double>(),
-                             method["measured"]["ci95_high_s"].get<double>(),
-                             100.0 * method["regret"].get<double>(),
-                             100.0 * method["regret_ci95"][0].get<double>(),
-                             100.0 * method["regret_ci95"][1].get<double>());
+      measured = fmt::format(
+          "measured T_c {:.4f} s [{:.4f}, {:.4f}]  regret {:+.1f}% [{:+.1f}, {:+.1f}]",
+          method["measured"]["median_s"].get<double>(),
+          method["measured"]["ci95_low_s"].get<double>(),
+          method["measured"]["ci95_high_s"].get<double>(), 100.0 * method["regret"].get<double>(),
+          100.0 * method["regret_ci95"][0].get<double>(),
+          100.0 * method["regret_ci95"][1].get<double>());
     }
     fmt::print("{:<11} {:<40} cost {:7.2f} s  {}\n", method["method"].get<std::string>(),
                method["variant"].get<std::string>(), method["tuning_cost_s"].get<double>(),

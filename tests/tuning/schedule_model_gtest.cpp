@@ -272,6 +272,27 @@ TEST(CostModel, ParticleLoopBuildsOncePerCellAndAtBreaksMidCell) {
   EXPECT_EQ(two.threads[0].homes, 10u);
 }
 
+// One PreparedWork serves every schedule, with the same outcome as a fresh one per schedule.
+TEST(CostModel, PreparedWorkIsSharedAcrossSchedules) {
+  const std::vector<std::uint32_t> tests{0, 6, 0, 0, 12, 1, 1};
+  const std::vector<std::uint32_t> homes{0, 3, 0, 0, 4, 1, 1};
+  const std::vector<std::uint8_t> builds{0, 1, 0, 0, 1, 1, 1};
+  const WorkView view(tests, homes, builds);
+  const PreparedWork prepared(view);
+  EXPECT_EQ(prepared.tests(1, 5), 18u);
+  EXPECT_EQ(prepared.homes(0, 7), 9u);
+  EXPECT_EQ(prepared.builds(2, 4), 0u);
+  EXPECT_EQ(PreparedWork(WorkView(tests)).homes(2, 5), 3u);  // tests alone: 1 per iteration
+  for (const Schedule& schedule :
+       {Schedule{ScheduleKind::kStatic, 0}, Schedule{ScheduleKind::kStatic, 2},
+        Schedule{ScheduleKind::kDynamic, 1}, Schedule{ScheduleKind::kGuided, 1}}) {
+    const ScheduleOutcome shared = simulate_schedule(prepared, 2, schedule, decimal_costs(), true);
+    const ScheduleOutcome fresh = simulate_schedule(view, 2, schedule, decimal_costs(), true);
+    EXPECT_EQ(shared.chunks, fresh.chunks);
+    EXPECT_DOUBLE_EQ(shared.makespan_seconds, fresh.makespan_seconds);
+  }
+}
+
 // A cell loop over five cells, three empty: empty cells cost an iteration, no home, no build,
 // even where a chunk starts on them.
 TEST(CostModel, CellLoopPaysHomesAndBuildsOnlyForOccupiedCells) {

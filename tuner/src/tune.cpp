@@ -114,10 +114,11 @@ ModelChoice model_choice(const Variant& structure, WorkView work, int threads,
                          const MachineCosts& costs, const std::vector<int>& grid) {
   ModelChoice best;
   best.predicted_s = std::numeric_limits<double>::infinity();
+  const PreparedWork prepared(work);
   for (const auto kind : {ScheduleKind::kStatic, ScheduleKind::kDynamic, ScheduleKind::kGuided}) {
     std::vector<int> candidates = grid;
     if (kind == ScheduleKind::kStatic) candidates.insert(candidates.begin(), 0);  // block
-    const ChunkPrediction p = predict_best_chunk(work, threads, kind, costs, candidates);
+    const ChunkPrediction p = predict_best_chunk(prepared, threads, kind, costs, candidates);
     if (p.best_seconds < best.predicted_s) {
       best = {with_schedule(structure, kind, p.best_chunk), p.best_seconds, p.candidates};
     }

@@ -39,13 +39,11 @@ void validate(const ChunkSearchOptions& options, const char* function) {
   }
   if (options.seed_chunk < 0 || options.confirmation_rounds < 0 || options.rounds < 1 ||
       !(options.equivalence_margin >= 0.0)) {
-    throw std::invalid_argument(name + ": seed_chunk = " + std::to_string(options.seed_chunk) +
-                                ", confirmation_rounds = " +
-                                std::to_string(options.confirmation_rounds) +
-                                ", equivalence_margin = " +
-                                std::to_string(options.equivalence_margin) +
-                                " must be >= 0, rounds = " + std::to_string(options.rounds) +
-                                " >= 1");
+    throw std::invalid_argument(
+        name + ": seed_chunk = " + std::to_string(options.seed_chunk) +
+        ", confirmation_rounds = " + std::to_string(options.confirmation_rounds) +
+        ", equivalence_margin = " + std::to_string(options.equivalence_margin) +
+        " must be >= 0, rounds = " + std::to_string(options.rounds) + " >= 1");
   }
 }
 
@@ -112,8 +110,7 @@ class GridSearch {
   std::size_t fastest() const {
     std::optional<std::size_t> best;
     for (std::size_t i = 0; i < entries_.size(); ++i) {
-      if (measured(i) &&
-          (!best || entries_[i].median_seconds <= entries_[*best].median_seconds)) {
+      if (measured(i) && (!best || entries_[i].median_seconds <= entries_[*best].median_seconds)) {
         best = i;
       }
     }

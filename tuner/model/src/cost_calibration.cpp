@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <optional>
 #include <stdexcept>
 
@@ -209,11 +210,27 @@ CalibrationResult calibrate_costs(std::span<const TimedRun> runs, const MachineC
   auto races = [](const TimedRun& run) {
     return run.threads > 1 && run.schedule.kind != ScheduleKind::kStatic;
   };
+  // Runs of one loop share its prefix sums.
+  std::vector<std::unique_ptr<PreparedWork>> prepared_works;
+  std::vector<const PreparedWork*> prepared(runs.size());
+  for (std::size_t i = 0; i < runs.size(); ++i) {
+    const WorkView& work = runs[i].work;
+    for (std::size_t j = 0; j < i && !prepared[i]; ++j) {
+      const WorkView& other = runs[j].work;
+      if (work.tests.data() == other.tests.data() && work.size() == other.size() &&
+          work.homes.data() == other.homes.data() && work.builds.data() == other.builds.data()) {
+        prepared[i] = prepared[j];
+      }
+    }
+    if (!prepared[i]) {
+      prepared_works.push_back(std::make_unique<PreparedWork>(work));
+      prepared[i] = prepared_works.back().get();
+    }
+  }
   std::vector<ScheduleOutcome> fixed(runs.size());
   for (std::size_t i = 0; i < runs.size(); ++i) {
-    if (!races(runs[i])) {
-      fixed[i] = simulate_schedule(runs[i].work, runs[i].threads, runs[i].schedule);
-    }
+    if (!races(runs[i]))
+      fixed[i] = simulate_schedule(*prepared[i], runs[i].threads, runs[i].schedule);
   }
 
   // Round r simulates every racing run once under `current`: that scores the previous fit and
@@ -227,7 +244,7 @@ CalibrationResult calibrate_costs(std::span<const TimedRun> runs, const MachineC
     for (std::size_t i = 0; i < runs.size(); ++i) {
       const TimedRun& run = runs[i];
       const ScheduleOutcome outcome =
-          races(run) ? simulate_schedule(run.work, run.threads, run.schedule, to_costs(current))
+          races(run) ? simulate_schedule(*prepared[i], run.threads, run.schedule, to_costs(current))
                      : ScheduleOutcome{};
       const ScheduleOutcome& shares = races(run) ? outcome : fixed[i];
       // The critical thread and the loop's time under `current` (region included in both).

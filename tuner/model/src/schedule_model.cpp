@@ -31,63 +31,45 @@ void check_schedule(const char* function, const Schedule& schedule) {
   }
 }
 
-// Prefix sums of the work's counts, in buffers per thread reused by every simulation: fresh
-// ones per simulation of an 8-million-cell loop cost 64 MB allocations and their page faults,
-// far more than the simulation itself. Simulations do not nest, so one set suffices.
-struct Prefixes {
-  std::vector<std::uint64_t> tests, homes, builds;  // homes/builds stay empty: 1 each
-};
-
-template <class Count>
-void prefix_sums(std::span<const Count> counts, std::vector<std::uint64_t>& prefix) {
-  prefix.resize(counts.size() + 1);
+template <class Count, class Sum>
+std::vector<Sum> prefix_sums(std::span<const Count> counts) {
+  std::vector<Sum> prefix(counts.size() + 1);
   prefix[0] = 0;
   for (std::size_t i = 0; i < counts.size(); ++i) prefix[i + 1] = prefix[i] + counts[i];
+  return prefix;
 }
 
-const Prefixes& prefix_buffers(const WorkView& work) {
-  thread_local Prefixes prefixes;
-  prefix_sums(work.tests, prefixes.tests);
-  prefixes.homes.clear();
-  prefixes.builds.clear();
-  if (!work.homes.empty()) prefix_sums(work.homes, prefixes.homes);
-  if (!work.builds.empty()) prefix_sums(work.builds, prefixes.builds);
-  return prefixes;
-}
-
-// Builds the per-thread shares chunk by chunk; prefix sums make a chunk's counts O(1).
+// Builds the per-thread shares chunk by chunk.
 class ShareBuilder {
  public:
-  ShareBuilder(const WorkView& work, int threads, const MachineCosts& costs, bool self_scheduled,
-               bool record_chunks)
+  ShareBuilder(const PreparedWork& work, int threads, const MachineCosts& costs,
+               bool self_scheduled, bool record_chunks)
       : work_(work),
         costs_(costs),
         self_scheduled_(self_scheduled),
         record_chunks_(record_chunks),
-        prefix_(prefix_buffers(work)),
         last_end_(static_cast<std::size_t>(threads), kNoChunkYet) {
     outcome_.threads.resize(static_cast<std::size_t>(threads));
     outcome_.self_scheduled = self_scheduled;
   }
 
-  std::uint64_t iterations() const { return work_.size(); }
+  std::uint64_t iterations() const { return work_.iterations(); }
 
   // Gives [begin, end) to `thread`; returns the chunk's seconds.
   double assign(int thread, std::uint64_t begin, std::uint64_t end) {
     ThreadShare& share = outcome_.threads[static_cast<std::size_t>(thread)];
+    const WorkView& view = work_.view();
     const std::uint64_t iterations = end - begin;
-    const std::uint64_t tests = prefix_.tests[end] - prefix_.tests[begin];
-    const std::uint64_t homes =
-        work_.homes.empty() ? iterations : prefix_.homes[end] - prefix_.homes[begin];
-    std::uint64_t builds =
-        work_.builds.empty() ? iterations : prefix_.builds[end] - prefix_.builds[begin];
+    const std::uint64_t tests = work_.tests(begin, end);
+    const std::uint64_t homes = work_.homes(begin, end);
+    std::uint64_t builds = work_.builds(begin, end);
     const bool breaks = last_end_[static_cast<std::size_t>(thread)] != begin;
     std::uint64_t cold = 0;
     if (breaks && begin < end) {
-      cold = work_.tests[begin];
+      cold = view.tests[begin];
       // The thread's previous iteration was elsewhere: the first home builds its ranges anew.
-      const bool has_home = work_.homes.empty() || work_.homes[begin] > 0;
-      const bool builds_anyway = work_.builds.empty() || work_.builds[begin] != 0;
+      const bool has_home = view.homes.empty() || view.homes[begin] > 0;
+      const bool builds_anyway = view.builds.empty() || view.builds[begin] != 0;
       if (has_home && !builds_anyway) ++builds;
     }
     share.tests += tests;
@@ -141,19 +123,18 @@ class ShareBuilder {
   }
 
  private:
-  WorkView work_;
+  const PreparedWork& work_;
   MachineCosts costs_;
   bool self_scheduled_;
   bool record_chunks_;
-  const Prefixes& prefix_;
   std::vector<std::uint64_t> last_end_;  // where each thread's previous chunk ended
   ScheduleOutcome outcome_;
 };
 
-ScheduleOutcome simulate_static(WorkView work, int threads, int chunk, const MachineCosts& costs,
-                                bool record_chunks) {
+ScheduleOutcome simulate_static(const PreparedWork& work, int threads, int chunk,
+                                const MachineCosts& costs, bool record_chunks) {
   ShareBuilder builder(work, threads, costs, false, record_chunks);
-  const std::uint64_t m = work.size();
+  const std::uint64_t m = work.iterations();
   const auto p = static_cast<std::uint64_t>(threads);
   if (chunk == 0) {
     // gomp_iter_static_next with chunk_size 0: q = n / nthreads, t = n % nthreads; threads
@@ -176,7 +157,7 @@ ScheduleOutcome simulate_static(WorkView work, int threads, int chunk, const Mac
 // Greedy self-scheduling: the next chunk goes to the thread whose clock is lowest (ties: fewer
 // chunks taken, then lowest id). next_size(remaining) gives the next chunk's size.
 template <class NextSize>
-ScheduleOutcome simulate_self_scheduled(WorkView work, int threads, NextSize next_size,
+ScheduleOutcome simulate_self_scheduled(const PreparedWork& work, int threads, NextSize next_size,
                                         const MachineCosts& costs, bool record_chunks) {
   ShareBuilder builder(work, threads, costs, true, record_chunks);
   using Clock = std::tuple<double, std::uint64_t, int>;  // free at, chunks taken, thread id
@@ -220,6 +201,24 @@ WorkView::WorkView(std::span<const std::uint32_t> tests_, std::span<const std::u
   }
 }
 
+PreparedWork::PreparedWork(WorkView work)
+    : work_(work), tests_(prefix_sums<std::uint32_t, std::uint64_t>(work.tests)) {
+  if (!work.homes.empty()) homes_ = prefix_sums<std::uint32_t, std::uint64_t>(work.homes);
+  if (!work.builds.empty()) builds_ = prefix_sums<std::uint8_t, std::uint64_t>(work.builds);
+}
+
+std::uint64_t PreparedWork::tests(std::uint64_t begin, std::uint64_t end) const {
+  return tests_[end] - tests_[begin];
+}
+
+std::uint64_t PreparedWork::homes(std::uint64_t begin, std::uint64_t end) const {
+  return homes_.empty() ? end - begin : homes_[end] - homes_[begin];
+}
+
+std::uint64_t PreparedWork::builds(std::uint64_t begin, std::uint64_t end) const {
+  return builds_.empty() ? end - begin : builds_[end] - builds_[begin];
+}
+
 MachineCosts MachineCosts::tests_only() {
   MachineCosts costs;
   costs.seconds_per_test = 1.0;
@@ -235,6 +234,11 @@ MachineCosts MachineCosts::tests_only() {
 }
 
 ScheduleOutcome simulate_schedule(WorkView work, int threads, const Schedule& schedule,
+                                  const MachineCosts& costs, bool record_chunks) {
+  return simulate_schedule(PreparedWork(work), threads, schedule, costs, record_chunks);
+}
+
+ScheduleOutcome simulate_schedule(const PreparedWork& work, int threads, const Schedule& schedule,
                                   const MachineCosts& costs, bool record_chunks) {
   check_threads("simulate_schedule", threads);
   check_schedule("simulate_schedule", schedule);
@@ -274,7 +278,7 @@ ScheduleOutcome simulate_chunk_sequence(WorkView work, int threads,
     ++index;
     return size;
   };
-  return simulate_self_scheduled(work, threads, next_size, costs, record_chunks);
+  return simulate_self_scheduled(PreparedWork(work), threads, next_size, costs, record_chunks);
 }
 
 std::vector<std::uint64_t> self_scheduling_chunk_sizes(std::uint64_t iterations, int threads,
@@ -334,6 +338,12 @@ std::vector<int> log2_chunk_grid(int largest_chunk) {
 }
 
 ChunkPrediction predict_best_chunk(WorkView work, int threads, ScheduleKind kind,
+                                   const MachineCosts& costs,
+                                   std::span<const int> candidate_chunks) {
+  return predict_best_chunk(PreparedWork(work), threads, kind, costs, candidate_chunks);
+}
+
+ChunkPrediction predict_best_chunk(const PreparedWork& work, int threads, ScheduleKind kind,
                                    const MachineCosts& costs,
                                    std::span<const int> candidate_chunks) {
   check_threads("predict_best_chunk", threads);

@@ -37,7 +37,7 @@ struct TuneOptions {
   std::uint64_t tolerance = 0;
   bool predict_only = false;   // the model alone: no timed run on the scene
   bool exhaustive = false;     // also sweep the whole chunk grid (ground truth, costly)
-  int search_samples = 3;     // timed runs per chunk evaluated by the search
+  int search_samples = 3;      // timed runs per chunk evaluated by the search
   int exhaustive_rounds = 10;  // rounds over the whole chunk grid, one timed run per chunk each
   // Rounds of the final verification: every distinct choice timed once per round, in a new
   // random order each round; regrets are paired ratios within rounds (statistics.hpp).

@@ -52,7 +52,7 @@ struct ChunkMeasurement {
   std::vector<double> samples_seconds;  // all samples, in measuring order
   double median_seconds = 0.0;
   MedianInterval interval;  // of the median
-  int evaluations = 0;  // calls of measure() for this chunk
+  int evaluations = 0;      // calls of measure() for this chunk
 };
 
 enum class SearchStop { kConverged, kEvaluationBudget, kTimeBudget };

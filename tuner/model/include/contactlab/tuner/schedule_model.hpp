@@ -108,6 +108,24 @@ struct ScheduleOutcome {
   std::uint64_t total_chunks = 0;
 };
 
+// A work view with its prefix sums, which make a chunk's counts O(1): simulations of many
+// schedules of one loop share them (an 8-million-cell loop's sums cost more than a simulation).
+// The viewed data must outlive it and stay unchanged.
+class PreparedWork {
+ public:
+  explicit PreparedWork(WorkView work);
+  const WorkView& view() const { return work_; }
+  std::uint64_t iterations() const { return work_.size(); }
+  std::uint64_t tests(std::uint64_t begin, std::uint64_t end) const;
+  std::uint64_t homes(std::uint64_t begin, std::uint64_t end) const;
+  std::uint64_t builds(std::uint64_t begin, std::uint64_t end) const;
+
+ private:
+  WorkView work_;
+  std::vector<std::uint64_t> tests_;
+  std::vector<std::uint64_t> homes_, builds_;  // empty where the view's are: 1 per iteration
+};
+
 // Distributes `work` (pair tests per iteration, loop order) over `threads` threads:
 // - static, chunk 0 (block): libgomp gives thread t iterations [t*q + min(t, r), ...) with
 //   q = M / P, r = M % P, the first r threads one more (gomp_iter_static_next, chunk_size 0);
@@ -118,6 +136,9 @@ struct ScheduleOutcome {
 // thread that has taken fewer chunks, then the lowest id (so with tests_only() costs every
 // thread still starts with one chunk, as in a real run, even when chunks have no work).
 // Throws std::invalid_argument for threads < 1, chunk < 0, or chunk 0 with dynamic/guided.
+ScheduleOutcome simulate_schedule(const PreparedWork& work, int threads, const Schedule& schedule,
+                                  const MachineCosts& costs = MachineCosts::tests_only(),
+                                  bool record_chunks = false);
 ScheduleOutcome simulate_schedule(WorkView work, int threads, const Schedule& schedule,
                                   const MachineCosts& costs = MachineCosts::tests_only(),
                                   bool record_chunks = false);
@@ -166,6 +187,9 @@ struct ChunkPrediction {
 // Predicts the loop time of `kind` with every candidate chunk (0 = static block, static only)
 // and returns the fastest; equal predictions prefer the larger chunk (better locality).
 // Throws std::invalid_argument for no candidates or an invalid schedule.
+ChunkPrediction predict_best_chunk(const PreparedWork& work, int threads, ScheduleKind kind,
+                                   const MachineCosts& costs,
+                                   std::span<const int> candidate_chunks);
 ChunkPrediction predict_best_chunk(WorkView work, int threads, ScheduleKind kind,
                                    const MachineCosts& costs,
                                    std::span<const int> candidate_chunks);

@@ -60,8 +60,7 @@ struct PairedRatio {
 };
 
 // Throws InputError for no pairs, unequal lengths, a NaN, or some b_i <= 0.
-PairedRatio paired_ratio(std::span<const double> a, std::span<const double> b,
-                         double level = 0.95);
+PairedRatio paired_ratio(std::span<const double> a, std::span<const double> b, double level = 0.95);
 
 // Load imbalance of one parallel loop from each thread's busy time:
 // (t_max - t_mean) / t_max; 0 for no threads or when every time is 0.
