@@ -76,30 +76,19 @@ std::string machine_key() {
   return fmt::format("{}|{} cpus|{}|{}", m.cpu_model, m.pus, b.flags, b.git_commit);
 }
 
-// The cost model's constants by name, for the cache file. A calibration stored by a model with
-// other constants (another kCostModelVersion) is a cache miss.
+// A calibration stored by a cost model with other constants (another kCostModelVersion) is a
+// cache miss.
 constexpr int kCostModelVersion = 2;
-constexpr std::array<std::pair<const char*, double MachineCosts::*>, 9> kCostFields{{
-    {"seconds_per_test", &MachineCosts::seconds_per_test},
-    {"seconds_per_iteration", &MachineCosts::seconds_per_iteration},
-    {"seconds_per_home", &MachineCosts::seconds_per_home},
-    {"seconds_per_build", &MachineCosts::seconds_per_build},
-    {"seconds_per_static_chunk", &MachineCosts::seconds_per_static_chunk},
-    {"seconds_per_grab", &MachineCosts::seconds_per_grab},
-    {"seconds_per_stream_break", &MachineCosts::seconds_per_stream_break},
-    {"seconds_per_cold_test", &MachineCosts::seconds_per_cold_test},
-    {"seconds_per_region", &MachineCosts::seconds_per_region},
-}};
 
 json costs_json(const MachineCosts& c) {
   json j;
-  for (const auto& [name, field] : kCostFields) j[name] = c.*field;
+  for (const auto& [name, field] : kMachineCostFields) j[name] = c.*field;
   return j;
 }
 
 MachineCosts costs_from_json(const json& j) {
   MachineCosts c;
-  for (const auto& [name, field] : kCostFields) c.*field = j.at(name).get<double>();
+  for (const auto& [name, field] : kMachineCostFields) c.*field = j.at(name).get<double>();
   return c;
 }
 

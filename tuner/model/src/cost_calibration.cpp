@@ -12,35 +12,23 @@ namespace contactlab::tuner {
 
 namespace {
 
-constexpr std::size_t kConstants = 9;
+constexpr std::size_t kConstants = kMachineCostFields.size();
 using Vector = std::array<double, kConstants>;
 
-constexpr std::array<const char*, kConstants> kConstantNames = {
-    "seconds_per_region", "seconds_per_test",         "seconds_per_iteration",
-    "seconds_per_home",   "seconds_per_build",        "seconds_per_static_chunk",
-    "seconds_per_grab",   "seconds_per_stream_break", "seconds_per_cold_test"};
-
 Vector to_vector(const MachineCosts& costs) {
-  return {costs.seconds_per_region, costs.seconds_per_test,         costs.seconds_per_iteration,
-          costs.seconds_per_home,   costs.seconds_per_build,        costs.seconds_per_static_chunk,
-          costs.seconds_per_grab,   costs.seconds_per_stream_break, costs.seconds_per_cold_test};
+  Vector v{};
+  for (std::size_t j = 0; j < kConstants; ++j) v[j] = costs.*kMachineCostFields[j].second;
+  return v;
 }
 
 MachineCosts to_costs(const Vector& v) {
   MachineCosts costs;
-  costs.seconds_per_region = v[0];
-  costs.seconds_per_test = v[1];
-  costs.seconds_per_iteration = v[2];
-  costs.seconds_per_home = v[3];
-  costs.seconds_per_build = v[4];
-  costs.seconds_per_static_chunk = v[5];
-  costs.seconds_per_grab = v[6];
-  costs.seconds_per_stream_break = v[7];
-  costs.seconds_per_cold_test = v[8];
+  for (std::size_t j = 0; j < kConstants; ++j) costs.*kMachineCostFields[j].second = v[j];
   return costs;
 }
 
-// The coefficients of the constants in the loop time when `share` is the slowest thread.
+// The coefficients of the constants (kMachineCostFields' order) in the loop time when `share`
+// is the slowest thread.
 Vector features(const ThreadShare& share, bool self_scheduled) {
   return {1.0,
           static_cast<double>(share.tests),
@@ -320,7 +308,7 @@ CalibrationResult calibrate_costs(std::span<const TimedRun> runs, const MachineC
   }
 
   for (std::size_t j = 0; j < kConstants; ++j) {
-    if (!identified[j]) result.unidentified.emplace_back(kConstantNames[j]);
+    if (!identified[j]) result.unidentified.emplace_back(kMachineCostFields[j].first);
   }
   result.rms_relative_error = best_errors.rms;
   result.max_relative_error = best_errors.max;

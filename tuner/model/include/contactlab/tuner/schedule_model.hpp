@@ -4,8 +4,10 @@
 // Once the costs are calibrated (cost_calibration.hpp) a prediction needs zero timed runs.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <span>
+#include <utility>
 #include <vector>
 
 #include "contactlab/kernels/variant.hpp"
@@ -75,6 +77,19 @@ struct MachineCosts {
   static MachineCosts tests_only();
   friend bool operator==(const MachineCosts&, const MachineCosts&) = default;
 };
+
+// Every constant of MachineCosts by name, in the order calibration fits them.
+inline constexpr std::array<std::pair<const char*, double MachineCosts::*>, 9> kMachineCostFields{{
+    {"seconds_per_region", &MachineCosts::seconds_per_region},
+    {"seconds_per_test", &MachineCosts::seconds_per_test},
+    {"seconds_per_iteration", &MachineCosts::seconds_per_iteration},
+    {"seconds_per_home", &MachineCosts::seconds_per_home},
+    {"seconds_per_build", &MachineCosts::seconds_per_build},
+    {"seconds_per_static_chunk", &MachineCosts::seconds_per_static_chunk},
+    {"seconds_per_grab", &MachineCosts::seconds_per_grab},
+    {"seconds_per_stream_break", &MachineCosts::seconds_per_stream_break},
+    {"seconds_per_cold_test", &MachineCosts::seconds_per_cold_test},
+}};
 
 // What one thread does under a schedule.
 struct ThreadShare {
