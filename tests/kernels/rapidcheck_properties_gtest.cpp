@@ -9,28 +9,11 @@
 
 #include <sstream>
 
+#include "../common/rapidcheck_seeded.hpp"
 #include "test_support.hpp"
 
 namespace contactlab::test {
 namespace {
-
-template <class Property>
-void check_with_seed(std::uint64_t seed, int cases, Property&& property) {
-  rc::detail::TestParams params;
-  params.seed = seed;
-  params.maxSuccess = cases;
-  params.maxSize = 100;
-  const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-  rc::detail::TestMetadata metadata;
-  metadata.id = std::string(info->test_suite_name()) + "/" + info->name();
-  metadata.description = info->name();
-  const auto result = rc::detail::checkTestable(std::forward<Property>(property), metadata, params);
-  if (!result.template is<rc::detail::SuccessResult>()) {
-    std::ostringstream message;
-    rc::detail::printResultMessage(result, message);
-    FAIL() << message.str();
-  }
-}
 
 const std::vector<Variant>& all() {
   static const std::vector<Variant> variants = every_variant();

@@ -7,32 +7,15 @@
 #include <algorithm>
 #include <cstdint>
 #include <numeric>
-#include <sstream>
 #include <vector>
 
+#include "../common/rapidcheck_seeded.hpp"
 #include "contactlab/tuner/chunk_search.hpp"
 #include "contactlab/tuner/schedule_model.hpp"
 
 namespace contactlab::tuner {
+using test::check_with_seed;
 namespace {
-
-template <class Property>
-void check_with_seed(std::uint64_t seed, int cases, Property&& property) {
-  rc::detail::TestParams params;
-  params.seed = seed;
-  params.maxSuccess = cases;
-  params.maxSize = 100;
-  const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-  rc::detail::TestMetadata metadata;
-  metadata.id = std::string(info->test_suite_name()) + "/" + info->name();
-  metadata.description = info->name();
-  const auto result = rc::detail::checkTestable(std::forward<Property>(property), metadata, params);
-  if (!result.template is<rc::detail::SuccessResult>()) {
-    std::ostringstream message;
-    rc::detail::printResultMessage(result, message);
-    FAIL() << message.str();
-  }
-}
 
 struct Case {
   std::vector<std::uint32_t> work;
