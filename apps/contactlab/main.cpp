@@ -92,26 +92,6 @@ struct SceneOptions {
     tn::SceneRecord record = tn::describe_generated_scene(s, scene);
     return {std::move(scene), std::move(record)};
   }
-
-  // The options that make a child process load the same scene (doubles in shortest
-  // round-trip form, so the child's scene is bit-identical).
-  std::vector<std::string> arguments() const {
-    std::vector<std::string> args;
-    if (!input.empty()) {
-      args = {"--input", input};
-    } else {
-      args = {"--scene",      kind,
-              "--n",          std::to_string(n),
-              "--seed",       std::to_string(seed),
-              "--core",       fmt::format("{}", core),
-              "--background", fmt::format("{}", background),
-              "--blobs",      std::to_string(blobs),
-              "--size-ratio", fmt::format("{}", size_ratio)};
-    }
-    if (diameter_given) args.insert(args.end(), {"--diameter", fmt::format("{}", diameter)});
-    if (!box.empty()) args.insert(args.end(), {"--box", box});
-    return args;
-  }
 };
 
 int command_scene(const SceneOptions& options, const std::string& out) {
@@ -141,7 +121,6 @@ struct DetectCommand {
   bool papi = false;
   std::string papi_events;
   std::string cache_sim;
-  bool cache_sim_child = false;
   std::string cache_file;  // tuning cache for --variant auto
   std::string contacts_out;
   std::string json_out;
@@ -179,24 +158,6 @@ void print_counters(const tn::CounterRecord& c) {
     fmt::print("  {:<28} {:>16}{}\n", e.name, e.total,
                threads.empty() ? "" : "  per thread [" + threads + "]");
   }
-}
-
-// Under valgrind, launched by --cache-sim: one detection with callgrind's collection switched on
-// around the detection loop only.
-int command_cache_sim_child(const SceneOptions& scene_options, const cl::Variant& variant,
-                            int threads) {
-  if (!tn::running_under_valgrind()) {
-    throw cl::InputError(
-        "--cache-sim-child is internal (contactlab runs itself under valgrind with it); use "
-        "--cache-sim");
-  }
-  auto [scene, record] = scene_options.load();
-  tn::CallgrindRegion region;
-  cl::DetectOptions options{variant, scene_options.diameter, threads, &region};
-  cl::ContactDetector detector;
-  const cl::DetectRun run = detector.run(scene, options);
-  fmt::print("contacts {}\n", run.contact_pairs);
-  return 0;
 }
 
 tn::Calibration machine_calibration(tn::TuningCache& cache, const tn::TuneOptions& options,
@@ -250,10 +211,7 @@ int command_detect(const SceneOptions& scene_options, const DetectCommand& comma
       throw cl::InputError("--max-repeat must be >= --repeat");
   }
   const bool automatic = command.variant == "auto";
-  const int threads = command.threads > 0 ? command.threads : omp_get_max_threads();
-  if (command.cache_sim_child) {
-    return command_cache_sim_child(scene_options, cl::parse_variant(command.variant), threads);
-  }
+  const int threads = cl::resolve_threads(command.threads);
   if (automatic && !command.cache_sim.empty()) {
     throw cl::InputError("--cache-sim needs an explicit --variant (not auto)");
   }
@@ -290,18 +248,10 @@ int command_detect(const SceneOptions& scene_options, const DetectCommand& comma
   tn::RunRecord run = tn::measure_detection(detector, scene, scene_record, options, measure);
 
   if (geometry) {
-    tn::CacheSimRequest request;
-    request.geometry = *geometry;
-    request.executable = std::filesystem::read_symlink("/proc/self/exe").string();
-    request.arguments = {"detect"};
-    for (auto& a : scene_options.arguments()) request.arguments.push_back(std::move(a));
-    request.arguments.insert(request.arguments.end(),
-                             {"--variant", cl::to_string(variant), "--threads",
-                              std::to_string(threads), "--cache-sim-child"});
-    request.threads = threads;
     fmt::print(stderr, "contactlab: simulating the {} caches under valgrind (slow)...\n",
                geometry->name);
-    run.counters.push_back(tn::simulate_caches(request));
+    run.counters.push_back(
+        tn::simulate_detection_caches(scene, scene_options.diameter, variant, threads, *geometry));
   }
 
   const tn::RunAggregates& a = *run.aggregates;
@@ -372,7 +322,7 @@ int command_tune(const SceneOptions& scene_options, const TuneCommand& command,
   if (command.max_chunk < 1) throw cl::InputError("--max-chunk must be >= 1");
   if (!command.json_out.empty()) cl::check_writable(command.json_out);
   tn::TuneOptions options;
-  options.threads = command.threads > 0 ? command.threads : omp_get_num_procs();
+  options.threads = cl::resolve_threads(command.threads);
   options.predict_only = command.predict_only;
   options.exhaustive = command.exhaustive;
   options.tolerance = command.tolerance;
@@ -537,7 +487,6 @@ int main(int argc, char** argv) {
   detect->add_option(
       "--cache-sim", detect_command.cache_sim,
       "simulate caches under valgrind: host, fx10, or custom:L1SIZE,WAYS,LINE:L2SIZE,WAYS,LINE");
-  detect->add_flag("--cache-sim-child", detect_command.cache_sim_child)->group("");  // internal
   detect->add_option("--contacts-out", detect_command.contacts_out, "CSV of contacts i,j (i < j)");
   detect->add_option("--json", detect_command.json_out, "result file (docs/result-schema.md)");
 

@@ -13,6 +13,8 @@
 #include "contactlab/kernels/pair_test.hpp"
 
 namespace contactlab {
+
+int resolve_threads(int requested) { return requested > 0 ? requested : omp_get_max_threads(); }
 namespace {
 
 // The stencil as rows of cells along x: for each (dy, dz) the cells dx in [dx_lo, dx_hi].
@@ -339,7 +341,7 @@ CellGrid ContactDetector::prepare(const Scene& scene, const DetectOptions& optio
   }
   if (scene.size() >= UINT32_MAX) throw InputError("at most 2^32 - 2 particles are supported");
 
-  run.threads = options.threads > 0 ? options.threads : omp_get_max_threads();
+  run.threads = resolve_threads(options.threads);
   const Order order = options.variant.order;
   const CellGrid grid(scene.box, diameters ? scene.max_diameter() : options.diameter,
                       order == Order::kMorton ? CellNumbering::kMorton : CellNumbering::kLinear);

@@ -69,6 +69,9 @@ TEST(DetectCli, CacheSimulationFx10) {
   EXPECT_TRUE(c.l2_miss_percent.has_value());
   ASSERT_TRUE(c.simulation.has_value());
   EXPECT_TRUE(c.simulation->geometry.approximation);
+  // The simulated program is not the native binary: the result says what it was built for.
+  EXPECT_FALSE(c.simulation->code_isa.empty());
+  EXPECT_NE(c.simulation->executable.find("contactlab-cachesim"), std::string::npos);
 }
 
 TEST(DetectCli, MissingValgrindIsRecorded) {
@@ -118,7 +121,6 @@ TEST(DetectCli, BadInputIsOneClearError) {
   expect_rejected("--cache-sim custom:48K,8,64:1M,16,64", "not a power of two");
   expect_rejected("--cache-sim sparc", "unknown cache geometry 'sparc'");
   expect_rejected("--adaptive --target-ci 2", "--target-ci");
-  expect_rejected("--cache-sim-child", "--cache-sim-child is internal");
   if (papi_info().initialized)
     expect_rejected("--papi-events PAPI_NOT_AN_EVENT_XYZ", "unknown PAPI event");
 }

@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 #include <set>
 
+#include "contactlab/kernels/detector.hpp"
 #include "contactlab/kernels/error.hpp"
 #include "contactlab/tuner/experiment.hpp"
 
@@ -28,6 +29,14 @@ std::string error_of(const json& document) {
     return e.what();
   }
   return "";
+}
+
+// threads 0 means what --threads 0 means everywhere: OpenMP's default team size.
+TEST(Experiment, ZeroThreadsIsOpenMPsDefault) {
+  json d = minimal();
+  d["threads"] = {0, 3};
+  const Experiment e = parse_experiment(d, "cfg.json");
+  EXPECT_EQ(e.threads, (std::vector<int>{resolve_threads(0), 3}));
 }
 
 TEST(Experiment, ShippedConfigsParse) {
@@ -71,7 +80,7 @@ TEST(Experiment, RejectsBadFieldsWithTheirPath) {
        "$.variants[0]: unknown order"},
       {[](json& d) { d["variants"] = {"particle/sorted/static,{k}"}; },
        "$.variants[0]: uses {k} but $.chunks is missing"},
-      {[](json& d) { d["threads"] = {0}; }, "$.threads[0]: thread counts must be in [1, 4096]"},
+      {[](json& d) { d["threads"] = {-1}; }, "$.threads[0]: thread counts must be in [0, 4096]"},
       {[](json& d) {
          d["repetitions"] = {{"min", 0}};
        },

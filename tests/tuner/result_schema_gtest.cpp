@@ -39,8 +39,13 @@ ResultFile sample_result() {
   simulated.l2_formula = "100 * (DLmr + DLmw) / (Dr + Dw)";
   simulated.counted_runs = 1;
   simulated.events = {{"Dr", 1000, {}}, {"D1mr", 45, {}}};
-  simulated.simulation = SimulationRecord{
-      CacheGeometry{"fx10", {32768, 2, 128}, {12582912, 24, 128}, "x", true}, "valgrind", 1, 0.5};
+  simulated.simulation =
+      SimulationRecord{CacheGeometry{"fx10", {32768, 2, 128}, {12582912, 24, 128}, "x", true},
+                       "valgrind",
+                       1,
+                       0.5,
+                       "/usr/bin/contactlab-cachesim",
+                       "x86-64"};
   run.counters.push_back(simulated);
   CounterRecord papi;
   papi.source = "papi";

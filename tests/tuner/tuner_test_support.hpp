@@ -65,6 +65,15 @@ class TempDir {
   std::filesystem::path path_;
 };
 
+// An empty folder of this name under GoogleTest's temporary directory (emptied if it exists).
+inline std::string temp_dir(const std::string& name) {
+  const std::filesystem::path dir =
+      std::filesystem::path(testing::TempDir()) / ("contactlab_" + name);
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  return dir.string();
+}
+
 inline SceneSpec small_clustered(std::uint64_t n, double diameter = 0.02) {
   SceneSpec spec;
   spec.kind = SceneKind::kClustered;

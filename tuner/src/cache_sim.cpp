@@ -8,6 +8,7 @@
 
 #include <cerrno>
 #include <chrono>
+#include <csignal>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
@@ -15,11 +16,8 @@
 #include <sstream>
 
 #include "contactlab/kernels/error.hpp"
+#include "contactlab/kernels/scene_io.hpp"
 #include "contactlab/tuner/context.hpp"
-
-#if CONTACTLAB_HAVE_CALLGRIND_H
-#include <valgrind/callgrind.h>
-#endif
 
 extern char** environ;
 
@@ -268,17 +266,22 @@ void validate_geometry(const CacheGeometry& g) {
   }
 }
 
+bool callgrind_toggle_compiled_in() {
 #if CONTACTLAB_HAVE_CALLGRIND_H
-void CallgrindRegion::thread_begin(int) { CALLGRIND_TOGGLE_COLLECT; }
-void CallgrindRegion::thread_end(int) { CALLGRIND_TOGGLE_COLLECT; }
-bool running_under_valgrind() { return RUNNING_ON_VALGRIND != 0; }
-bool callgrind_toggle_compiled_in() { return true; }
+  return true;
 #else
-void CallgrindRegion::thread_begin(int) {}
-void CallgrindRegion::thread_end(int) {}
-bool running_under_valgrind() { return false; }
-bool callgrind_toggle_compiled_in() { return false; }
+  return false;
 #endif
+}
+
+std::string cachesim_executable() {
+  if (const char* path = std::getenv("CONTACTLAB_CACHESIM"); path && *path) return path;
+  std::error_code ec;
+  const fs::path self = fs::read_symlink("/proc/self/exe", ec);
+  return ((ec ? fs::path(".") : self.parent_path()) / "contactlab-cachesim").string();
+}
+
+std::string cachesim_code_isa() { return CONTACTLAB_CACHESIM_ISA; }
 
 std::uint64_t CallgrindTotals::get(std::string_view event) const {
   for (std::size_t i = 0; i < events.size(); ++i) {
@@ -330,6 +333,7 @@ CounterRecord simulate_caches(const CacheSimRequest& request) {
   sim.geometry = request.geometry;
   sim.threads = request.threads;
   sim.simulator = "valgrind callgrind --cache-sim=yes";
+  sim.executable = request.executable;
   r.notes.push_back("simulated, not measured: " + request.geometry.description);
   if (request.threads > 1) {
     r.notes.push_back(
@@ -342,10 +346,6 @@ CounterRecord simulate_caches(const CacheSimRequest& request) {
     r.simulation = sim;
     return r;
   };
-  if (!callgrind_toggle_compiled_in()) {
-    return unavailable(
-        "built without valgrind/callgrind.h: the detection region cannot be isolated");
-  }
   const std::string valgrind = find_valgrind(request.valgrind);
   if (valgrind.empty()) {
     return unavailable(
@@ -390,6 +390,13 @@ CounterRecord simulate_caches(const CacheSimRequest& request) {
     return record;
   };
   if (status < 0) return finish(unavailable(error));
+  if (WIFSIGNALED(status) && WTERMSIG(status) == SIGILL) {
+    return finish(unavailable(fmt::format(
+        "valgrind cannot execute this binary's instructions: the simulated run of {} hit an "
+        "instruction {} does not implement (killed by SIGILL); build the simulated program "
+        "without that instruction set. valgrind said: {}",
+        request.executable, valgrind_version(log_file), tail_of_file(log_file, 3))));
+  }
   if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
     const std::string how = WIFEXITED(status)
                                 ? fmt::format("exited with status {}", WEXITSTATUS(status))
@@ -423,6 +430,56 @@ CounterRecord simulate_caches(const CacheSimRequest& request) {
   } catch (const InputError& e) {
     return finish(unavailable(e.what()));
   }
+}
+
+CounterRecord simulate_detection_caches(const Scene& scene, double diameter, const Variant& variant,
+                                        int threads, const CacheGeometry& geometry) {
+  validate_geometry(geometry);
+  CacheSimRequest request;
+  request.geometry = geometry;
+  request.executable = cachesim_executable();
+  request.threads = threads;
+  auto unavailable = [&](std::string reason) {
+    CounterRecord r;
+    r.source = "simulated:" + geometry.name;
+    r.region = kRegion;
+    r.reason = std::move(reason);
+    r.simulation = SimulationRecord{
+        geometry,           "valgrind callgrind --cache-sim=yes", threads, 0.0, request.executable,
+        cachesim_code_isa()};
+    return r;
+  };
+  if (!callgrind_toggle_compiled_in()) {
+    return unavailable(
+        "built without valgrind/callgrind.h: the detection region cannot be isolated");
+  }
+  if (::access(request.executable.c_str(), X_OK) != 0) {
+    return unavailable(
+        fmt::format("the simulated program {} is missing (it is built and "
+                    "installed beside contactlab; or set CONTACTLAB_CACHESIM)",
+                    request.executable));
+  }
+  std::error_code ec;
+  std::string pattern = (fs::temp_directory_path(ec) / "contactlab-scene-XXXXXX").string();
+  if (!::mkdtemp(pattern.data())) {
+    return unavailable(
+        fmt::format("cannot create a temporary directory: {}", std::strerror(errno)));
+  }
+  const fs::path dir(pattern);
+  const std::string scene_file = (dir / "scene.bin").string();
+  CounterRecord record;
+  try {
+    write_binary_scene(scene, scene_file);
+    request.arguments = {
+        "--scene-file", scene_file,         "--diameter", fmt::format("{}", diameter),
+        "--variant",    to_string(variant), "--threads",  std::to_string(threads)};
+    record = simulate_caches(request);
+  } catch (const InputError& e) {
+    record = unavailable(e.what());
+  }
+  fs::remove_all(dir, ec);
+  if (record.simulation) record.simulation->code_isa = cachesim_code_isa();
+  return record;
 }
 
 }  // namespace contactlab::tuner

@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 #include <optional>
 
+#include "contactlab/kernels/detector.hpp"
 #include "contactlab/kernels/error.hpp"
 #include "contactlab/kernels/rng.hpp"
 #include "contactlab/tuner/json_reader.hpp"
@@ -195,10 +196,11 @@ Experiment parse_experiment_document(const JsonIn& root) {
   read(threads, experiment.threads);
   if (experiment.threads.empty()) threads.fail("expected a non-empty array");
   for (std::size_t i = 0; i < experiment.threads.size(); ++i) {
-    if (experiment.threads[i] < 1 || experiment.threads[i] > 4096) {
+    if (experiment.threads[i] < 0 || experiment.threads[i] > 4096) {
       JsonIn(threads.value()[i], threads.path() + "[" + std::to_string(i) + "]")
-          .fail("thread counts must be in [1, 4096]");
+          .fail("thread counts must be in [0, 4096] (0 = OpenMP's default, OMP_NUM_THREADS)");
     }
+    experiment.threads[i] = resolve_threads(experiment.threads[i]);
   }
 
   if (const auto repetitions = o.optional_field("repetitions")) {

@@ -16,7 +16,7 @@ RunRecord measure_detection(ContactDetector& detector, const Scene& scene,
 
   RunRecord record;
   record.parameters.variant = to_string(options.variant);
-  record.parameters.threads = options.threads > 0 ? options.threads : omp_get_max_threads();
+  record.parameters.threads = resolve_threads(options.threads);
   record.parameters.scene = scene_record;
   record.parameters.repetition = measure.repetition;
 

@@ -108,7 +108,9 @@ json to_json_value(const SimulationRecord& v) {
   return {{"geometry", to_json_value(v.geometry)},
           {"simulator", v.simulator},
           {"threads", v.threads},
-          {"wall_s", v.wall_s}};
+          {"wall_s", v.wall_s},
+          {"executable", v.executable},
+          {"code_isa", v.code_isa}};
 }
 
 json to_json_value(const EventCount& v) {
@@ -368,6 +370,9 @@ void read(const JsonIn& in, SimulationRecord& out) {
   o("simulator", out.simulator);
   o("threads", out.threads);
   o("wall_s", out.wall_s);
+  // Absent from results written before the simulated program was built without AVX-512.
+  if (const auto e = o.optional_field("executable")) read(*e, out.executable);
+  if (const auto c = o.optional_field("code_isa")) read(*c, out.code_isa);
   o.finish();
 }
 

@@ -31,28 +31,6 @@ std::string format_duration(double seconds) {
                    : fmt::format("{}m{:02}s", s / 60, s % 60);
 }
 
-// Arguments that make `contactlab detect` rebuild the scene of a point in the child process
-// the cache simulator runs (generated scenes are pure functions of these parameters).
-std::vector<std::string> scene_arguments(const ExperimentScene& scene) {
-  std::vector<std::string> args;
-  if (!scene.file.empty()) {
-    args = {"--input", scene.file};
-  } else {
-    const SceneSpec& s = scene.spec;
-    if (s.blob_radius != SceneSpec{}.blob_radius) {
-      throw InputError("cache simulation: scenes with a non-default blob_radius are not supported");
-    }
-    args = {
-        "--scene",      std::string(to_string(s.kind)),  "--n",     std::to_string(s.n),
-        "--seed",       std::to_string(s.seed),          "--core",  fmt::format("{}", s.core),
-        "--background", fmt::format("{}", s.background), "--blobs", std::to_string(s.blob_count),
-        "--size-ratio", fmt::format("{}", s.size_ratio)};
-  }
-  if (scene.diameter > 0.0)
-    args.insert(args.end(), {"--diameter", fmt::format("{}", scene.diameter)});
-  return args;
-}
-
 }  // namespace
 
 std::string point_key(const std::string& scene_checksum, const std::string& variant, int threads) {
@@ -165,17 +143,8 @@ SweepSummary run_sweep(const Experiment& experiment, const SweepOptions& options
       }
       run = measure_detection(detector, scene, scene_record, detect, measure);
       if (geometry) {
-        CacheSimRequest request;
-        request.geometry = *geometry;
-        request.executable = fs::read_symlink("/proc/self/exe").string();
-        request.arguments = {"detect"};
-        for (auto& a : scene_arguments(experiment.scenes[point.scene]))
-          request.arguments.push_back(std::move(a));
-        request.arguments.insert(request.arguments.end(),
-                                 {"--variant", to_string(point.variant), "--threads",
-                                  std::to_string(point.threads), "--cache-sim-child"});
-        request.threads = point.threads;
-        run.counters.push_back(simulate_caches(request));
+        run.counters.push_back(
+            simulate_detection_caches(scene, diameter, point.variant, point.threads, *geometry));
       }
       if (experiment.check_contacts && run.status != RunStatus::kFailed) {
         const auto [missing, extra] =

@@ -244,7 +244,7 @@ Calibration calibrate_machine(const TuneOptions& options, int threads) {
 TuneReport tune(const Scene& scene, const SceneRecord& scene_record, double diameter,
                 const TuneOptions& options, const Calibration& calibration,
                 const std::string& command_line) {
-  const int threads = options.threads > 0 ? options.threads : omp_get_num_procs();
+  const int threads = resolve_threads(options.threads);
   if (options.chunk_grid.empty()) throw InputError("tune: the chunk grid is empty");
   if (options.search_samples < 1 || options.exhaustive_rounds < 1 || options.verify_rounds < 1) {
     throw InputError(fmt::format(

@@ -58,11 +58,16 @@ class DetectionObserver {
   virtual void region_end() {}
 };
 
+// The one meaning of "threads = 0" everywhere (detect, sweep, tune, --variant auto and the
+// tuning cache's keys): OpenMP's default team size, omp_get_max_threads(), which follows
+// OMP_NUM_THREADS. Positive counts are returned as they are.
+int resolve_threads(int requested);
+
 struct DetectOptions {
   Variant variant;
   // Contact diameter D for scenes without per-particle diameters; ignored otherwise.
   double diameter = 0.0;
-  int threads = 0;  // 0 = OpenMP's default
+  int threads = 0;  // 0 = resolve_threads(0)
   DetectionObserver* observer = nullptr;
 };
 

@@ -2,10 +2,11 @@
 // --cache-sim=yes) with a named geometry, for machines without counters and to compare with
 // the FX10 of Takagi et al. (docs/measurement.md).
 //
-// The parent process re-runs a program (normally contactlab itself, `detect ...
-// --cache-sim-child`) under valgrind with collection off at start; the child wraps its
-// detection loop in a CallgrindRegion observer, which switches collection on and off on every
-// OpenMP thread (callgrind's collection state is per thread). The parent then reads the totals.
+// The parent process writes the scene to a temporary binary file and runs contactlab-cachesim
+// (apps/contactlab-cachesim, built beside contactlab from the same kernel sources without
+// AVX-512, which valgrind cannot execute) under valgrind with collection off at start; the
+// child switches collection on and off around the detection loop on every OpenMP thread
+// (callgrind's collection state is per thread). The parent then reads the totals.
 #pragma once
 
 #include <string>
@@ -36,16 +37,16 @@ CacheGeometry parse_cache_geometry(std::string_view text);
 // Throws InputError naming the level and the fault.
 void validate_geometry(const CacheGeometry& geometry);
 
-// Switches callgrind's collection on for the detection loop on each thread; a no-op when not
-// running under valgrind (or when built without valgrind/callgrind.h).
-class CallgrindRegion final : public DetectionObserver {
- public:
-  void thread_begin(int thread) override;
-  void thread_end(int thread) override;
-};
-
-bool running_under_valgrind();
+// Whether contactlab-cachesim was built with valgrind/callgrind.h, without which it cannot
+// switch collection on around the detection loop alone.
 bool callgrind_toggle_compiled_in();
+
+// The program simulated detections run: $CONTACTLAB_CACHESIM, else contactlab-cachesim beside
+// the running executable.
+std::string cachesim_executable();
+
+// The instruction set contactlab-cachesim was compiled for, in words.
+std::string cachesim_code_isa();
 
 struct CacheSimRequest {
   CacheGeometry geometry;
@@ -56,9 +57,15 @@ struct CacheSimRequest {
 };
 
 // Runs the simulation. Never throws for a missing valgrind, a failing child or an unreadable
-// output: the record then says available: false and why. Throws InputError only for an
-// invalid geometry.
+// output: the record then says available: false and why (a child killed by SIGILL: valgrind
+// could not execute its instructions). Throws InputError only for an invalid geometry.
 CounterRecord simulate_caches(const CacheSimRequest& request);
+
+// One detection of `scene` under `variant` and `threads`, simulated: the scene goes to a
+// temporary binary file that contactlab-cachesim reads under valgrind. The same contract as
+// simulate_caches; the record names the simulated program and its instruction set.
+CounterRecord simulate_detection_caches(const Scene& scene, double diameter, const Variant& variant,
+                                        int threads, const CacheGeometry& geometry);
 
 // Event name -> total from a callgrind output file's "events:" and "totals:" (or "summary:")
 // lines. Throws InputError naming the file when they are missing or malformed.

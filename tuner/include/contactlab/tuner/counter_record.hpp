@@ -42,6 +42,10 @@ struct SimulationRecord {
   std::string simulator;  // e.g. "valgrind-3.19.0 callgrind --cache-sim=yes"
   int threads = 1;        // threads of the simulated run (they share one simulated cache)
   double wall_s = 0.0;    // wall time of the simulation
+  // The simulated program and the instruction set it was compiled for: not the native
+  // binary's (valgrind cannot execute AVX-512), so the instruction mix can differ from it.
+  std::string executable;
+  std::string code_isa;
 };
 
 struct CounterRecord {

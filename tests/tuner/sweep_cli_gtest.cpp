@@ -1,0 +1,88 @@
+// contactlab sweep end to end: results are complete, an interrupted sweep resumes to the same
+// set of points, a bad config writes nothing.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <set>
+
+#include "contactlab/tuner/result_schema.hpp"
+#include "tuner_test_support.hpp"
+
+namespace contactlab::test {
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+std::set<std::string> point_keys(const std::string& path) {
+  const tuner::ResultFile result = tuner::read_result_file(path);
+  std::set<std::string> keys;
+  for (const auto& run : result.runs) {
+    keys.insert(run.parameters.scene.checksum + "|" + run.parameters.variant + "|" +
+                std::to_string(run.parameters.threads));
+  }
+  return keys;
+}
+
+const std::string kSmoke = std::string(CONTACTLAB_SOURCE_DIR) + "/experiments/smoke.json";
+
+TEST(SweepCli, WritesEveryPointCheckedAgainstTheReference) {
+  const std::string dir = temp_dir("sweep_full");
+  const auto r = run_command(contactlab_exe() + " sweep " + kSmoke + " --out " + dir + "/r.json");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const tuner::ResultFile result = tuner::read_result_file(dir + "/r.json");
+  EXPECT_EQ(result.runs.size(), 20u);  // 2 scenes x (3 + 1 + 1) variants x 2 thread counts
+  for (const auto& run : result.runs) {
+    EXPECT_EQ(run.status, tuner::RunStatus::kOk) << run.message;
+    ASSERT_TRUE(run.contact_check) << run.parameters.variant;
+    if (run.parameters.variant.find("float") == std::string::npos) {
+      EXPECT_EQ(run.contact_check->missing_pairs + run.contact_check->extra_pairs, 0u);
+    }
+  }
+  // A second sweep into the same file is refused, and the file is untouched.
+  const auto again =
+      run_command(contactlab_exe() + " sweep " + kSmoke + " --out " + dir + "/r.json");
+  EXPECT_EQ(again.exit_code, 2);
+  EXPECT_NE(again.output.find("--resume"), std::string::npos);
+  EXPECT_EQ(point_keys(dir + "/r.json").size(), 20u);
+}
+
+TEST(SweepCli, InterruptedSweepResumesToTheSameSetOfPoints) {
+  const std::string dir = temp_dir("sweep_resume");
+  // A slower config: interrupt it after a moment (wherever it is), then resume.
+  json config = json::parse(std::ifstream(kSmoke));
+  config["scenes"][0]["n"] = 60000;
+  config["scenes"][0]["diameter"] = 0.01;
+  config["repetitions"] = {{"warmup", 1}, {"min", 3}};
+  std::ofstream(dir + "/slow.json") << config.dump();
+  const std::string sweep =
+      contactlab_exe() + " sweep " + dir + "/slow.json --out " + dir + "/r.json";
+  run_command("timeout -s INT 1.5 " + sweep);
+  if (fs::exists(dir + "/r.json")) {
+    const auto partial = point_keys(dir + "/r.json");  // a valid file, whatever it holds
+    EXPECT_LE(partial.size(), 20u);
+  }
+  const auto resumed = run_command(sweep + " --resume");
+  ASSERT_EQ(resumed.exit_code, 0) << resumed.output;
+  const auto full =
+      run_command(contactlab_exe() + " sweep " + dir + "/slow.json --out " + dir + "/full.json");
+  ASSERT_EQ(full.exit_code, 0) << full.output;
+  EXPECT_EQ(point_keys(dir + "/r.json"), point_keys(dir + "/full.json"));
+  EXPECT_EQ(point_keys(dir + "/r.json").size(), 20u);
+}
+
+TEST(SweepCli, BadConfigIsOneLineAndWritesNothing) {
+  const std::string dir = temp_dir("sweep_bad");
+  std::ofstream(dir + "/bad.json")
+      << R"({"schema_version": 1, "name": "x", "scenes": [], "variants": [], "threads": [1]})";
+  const auto r =
+      run_command(contactlab_exe() + " sweep " + dir + "/bad.json --out " + dir + "/r.json");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.output.find("$.scenes: expected a non-empty array"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(dir + "/r.json"));
+}
+
+}  // namespace
+}  // namespace contactlab::test

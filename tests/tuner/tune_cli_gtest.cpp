@@ -1,0 +1,115 @@
+// contactlab tune end to end: the tuner reports every method honestly, --variant auto caches,
+// --threads 0 means the same in tune and detect.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "tuner_test_support.hpp"
+
+namespace contactlab::test {
+namespace {
+
+using nlohmann::json;
+
+// One cache for the tune tests (each runs in its own process): the CTest fixture
+// tune_calibration (tests/tuner/CMakeLists.txt) calibrates the machine into it before them, and
+// they find the calibration (keyed by machine and build) there.
+std::string tune_cache() { return CONTACTLAB_TUNE_CACHE_DIR; }
+
+// A fresh cache holding the shared calibration and no tuned choice, for the tests whose first
+// step must miss.
+std::string cache_without_choices(const std::string& name) {
+  const std::string dir = temp_dir(name);
+  json cache = json::parse(std::ifstream(tune_cache() + "/tuning.json"));
+  cache["choices"] = json::object();
+  std::ofstream(dir + "/tuning.json") << cache.dump();
+  return dir;
+}
+
+TEST(TuneCli, PredictOnlyMakesNoTimedRunAndLabelsPredictions) {
+  const std::string dir = temp_dir("tune_predict");
+  const auto r = run_command("CONTACTLAB_CACHE_DIR=" + tune_cache() + " " + contactlab_exe() +
+                             " tune --scene clustered --n 20000 -D 0.01 --threads 2 --max-chunk 256"
+                             " --predict-only --json " +
+                             dir + "/t.json");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const json t = json::parse(std::ifstream(dir + "/t.json"));
+  ASSERT_EQ(t["methods"].size(), 1u);
+  EXPECT_EQ(t["methods"][0]["method"], "model");
+  EXPECT_EQ(t["methods"][0]["timed_runs"], 0);
+  EXPECT_FALSE(t["classic"].empty());
+  for (const auto& p : t["predictions"]) {
+    EXPECT_NE(p["label"].get<std::string>().find("predicted"), std::string::npos);
+  }
+}
+
+TEST(TuneCli, ReportsModelSearchExhaustiveWithRegretAndCost) {
+  const std::string dir = temp_dir("tune_full");
+  const auto r =
+      run_command("CONTACTLAB_CACHE_DIR=" + tune_cache() + " " + contactlab_exe() +
+                  " tune --scene blobs --blobs 1 --n 20000 -D 0.01 --threads 2 --max-chunk 256"
+                  " --exhaustive --json " +
+                  dir + "/t.json");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const json t = json::parse(std::ifstream(dir + "/t.json"));
+  ASSERT_EQ(t["methods"].size(), 3u);
+  EXPECT_EQ(t["methods"][0]["method"], "model");
+  EXPECT_EQ(t["methods"][1]["method"], "search");
+  EXPECT_EQ(t["methods"][2]["method"], "exhaustive");
+  for (int m = 0; m < 2; ++m) {
+    EXPECT_GE(t["methods"][m]["regret"].get<double>(), 0.0);
+    EXPECT_GT(t["methods"][m]["measured"]["median_s"].get<double>(), 0.0);
+    EXPECT_GE(t["methods"][m]["tuning_cost_s"].get<double>(), 0.0);
+  }
+  // The search spends fewer timed runs than the exhaustive sweep.
+  EXPECT_LT(t["methods"][1]["evaluations"].get<int>() * 3,
+            t["methods"][2]["timed_runs"].get<int>());
+  EXPECT_TRUE(t["context"].contains("machine"));
+}
+
+TEST(TuneCli, VariantAutoTunesOnAMissThenUsesTheCache) {
+  const std::string scene = " --scene uniform --n 5000 -D 0.03 --threads 2";
+  const std::string env = "CONTACTLAB_CACHE_DIR=" + cache_without_choices("auto_cache") + " ";
+  const auto first =
+      run_command(env + contactlab_exe() + " detect" + scene + " --variant auto --repeat 1");
+  ASSERT_EQ(first.exit_code, 0) << first.output;
+  EXPECT_NE(first.output.find("tuning"), std::string::npos) << first.output;
+  const auto second =
+      run_command(env + contactlab_exe() + " detect" + scene + " --variant auto --repeat 1");
+  ASSERT_EQ(second.exit_code, 0) << second.output;
+  EXPECT_NE(second.output.find("(from "), std::string::npos) << second.output;
+}
+
+// --threads 0 means OpenMP's default team size in tune and in detect alike, so a choice that
+// tune stored under OMP_NUM_THREADS=1 is the one --variant auto finds.
+TEST(TuneCli, ThreadsZeroFollowsOmpNumThreadsInTuneAndVariantAuto) {
+  const std::string dir = temp_dir("tune_threads0");
+  const std::string env =
+      "OMP_NUM_THREADS=1 CONTACTLAB_CACHE_DIR=" + cache_without_choices("threads0_cache") + " ";
+  const std::string scene = " --scene uniform --n 4000 -D 0.04 --seed 11 --threads 0";
+  const auto tuned = run_command(env + contactlab_exe() + " tune" + scene + " --max-chunk 64" +
+                                 " --verify-rounds 3 --json " + dir + "/t.json");
+  ASSERT_EQ(tuned.exit_code, 0) << tuned.output;
+  EXPECT_EQ(json::parse(std::ifstream(dir + "/t.json"))["threads"], 1) << tuned.output;
+  const auto detected =
+      run_command(env + contactlab_exe() + " detect" + scene + " --variant auto --repeat 1");
+  ASSERT_EQ(detected.exit_code, 0) << detected.output;
+  EXPECT_NE(detected.output.find("(from "), std::string::npos)
+      << "--variant auto missed the choice tune stored:\n"
+      << detected.output;
+  EXPECT_EQ(detected.output.find("no cached choice"), std::string::npos) << detected.output;
+}
+
+TEST(TuneCli, CorruptCacheIsAClearError) {
+  const std::string dir = temp_dir("tune_corrupt");
+  std::ofstream(dir + "/tuning.json") << "{ broken";
+  const auto r = run_command("CONTACTLAB_CACHE_DIR=" + dir + " " + contactlab_exe() +
+                             " tune --scene uniform --n 1000 -D 0.05 --predict-only");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.output.find("tuning cache is not valid JSON"), std::string::npos) << r.output;
+}
+
+}  // namespace
+}  // namespace contactlab::test
