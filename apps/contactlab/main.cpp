@@ -377,20 +377,7 @@ int command_tune(const SceneOptions& scene_options, const TuneCommand& command,
 }
 
 int command_variants() {
-  fmt::print(
-      "Variants are written loop/order/stencil/schedule (loop/order/schedule = full stencil).\n");
-  fmt::print(
-      "  loop      cell | particle            parallel over grid cells (paper Fig. 4) or particles "
-      "(Fig. 5)\n");
-  fmt::print(
-      "  order     unsorted | sorted | morton input order, grouped by cell (paper), or by cell in "
-      "Morton order\n");
-  fmt::print(
-      "  stencil   full | half                27 cells, or own + 13 forward cells (each pair "
-      "tested once)\n");
-  fmt::print(
-      "  schedule  static | static,k | dynamic,k | guided,k   (k >= 1; static = block "
-      "partition)\n\n");
+  fmt::print("{}\n", cl::variants_help());
   fmt::print("The paper's configurations:\n");
   for (const auto& v : cl::paper_variants()) fmt::print("  {}\n", cl::to_string(v));
   fmt::print("\nEvery loop/order/stencil (schedules as above, any k):\n");

@@ -1,5 +1,6 @@
 #include "contactlab/kernels/variant.hpp"
 
+#include <algorithm>
 #include <array>
 #include <charconv>
 
@@ -70,16 +71,6 @@ std::string to_string(const Schedule& schedule) {
   return text;
 }
 
-std::string to_string(const Variant& v) {
-  std::string text = std::string(to_string(v.loop)) + "/" + std::string(to_string(v.order)) + "/" +
-                     std::string(to_string(v.stencil)) + "/" + to_string(v.schedule);
-  if (v.precision != Precision::kDouble) {
-    text += '/';
-    text += to_string(v.precision);
-  }
-  return text;
-}
-
 LoopKind parse_loop(std::string_view text) { return parse_name(kLoops, text, "loop"); }
 Order parse_order(std::string_view text) { return parse_name(kOrders, text, "order"); }
 Stencil parse_stencil(std::string_view text) { return parse_name(kStencils, text, "stencil"); }
@@ -112,20 +103,136 @@ Schedule parse_schedule(std::string_view text) {
   return schedule;
 }
 
+namespace {
+
+template <auto Member, auto Parse>
+void parse_into(std::string_view text, Variant& into) {
+  into.*Member = Parse(text);
+}
+
+template <auto Member>
+std::string print_of(const Variant& variant) {
+  return std::string(to_string(variant.*Member));
+}
+
+template <class Enum, std::size_t N>
+std::vector<std::string_view> names_of(const NameTable<Enum, N>& table) {
+  std::vector<std::string_view> names;
+  for (const auto& entry : table) names.push_back(entry.second);
+  return names;
+}
+
+const VariantAxis& axis_named(std::string_view name) {
+  std::string names;
+  for (const VariantAxis& axis : variant_axes()) {
+    if (axis.name == name) return axis;
+    names += (names.empty() ? "" : ", ") + std::string(axis.name);
+  }
+  throw InputError("unknown variant axis '" + std::string(name) + "' (choose " + names + ")");
+}
+
+}  // namespace
+
+const std::vector<VariantAxis>& variant_axes() {
+  static const std::vector<VariantAxis> axes{
+      {"loop", "what one parallel iteration is", names_of(kLoops),
+       "cell | particle: parallel over grid cells (paper Fig. 4) or particles (Fig. 5)", true,
+       parse_into<&Variant::loop, parse_loop>, print_of<&Variant::loop>},
+      {"order", "memory order of the particles during detection", names_of(kOrders),
+       "unsorted | sorted | morton: input order, grouped by cell (paper), or by cell in Morton "
+       "order",
+       true, parse_into<&Variant::order, parse_order>, print_of<&Variant::order>},
+      {"stencil", "which neighbour cells a home particle tests", names_of(kStencils),
+       "full | half: 27 cells, or own + 13 forward cells (each pair tested once)", true,
+       parse_into<&Variant::stencil, parse_stencil>, print_of<&Variant::stencil>},
+      {"schedule", "OpenMP schedule of the parallel loop", names_of(kScheduleKinds),
+       "static | static,k | dynamic,k | guided,k: k >= 1; static = block partition", true,
+       parse_into<&Variant::schedule, parse_schedule>,
+       [](const Variant& v) { return to_string(v.schedule); }},
+      {"precision", "arithmetic of the pair test", names_of(kPrecisions),
+       "double | float: float is relative to the box corner (half the traffic, may misjudge "
+       "near-ties)",
+       false, parse_into<&Variant::precision, parse_precision>, print_of<&Variant::precision>},
+  };
+  return axes;
+}
+
+const std::vector<VariantRule>& variant_rules() {
+  static const std::vector<VariantRule> rules{};
+  return rules;
+}
+
+std::optional<std::string_view> broken_rule(const Variant& variant) {
+  for (const VariantRule& rule : variant_rules()) {
+    if (!rule.holds(variant)) return rule.description;
+  }
+  return std::nullopt;
+}
+
+std::string to_string(const Variant& v) {
+  const Variant defaults;
+  std::string text;
+  for (const VariantAxis& axis : variant_axes()) {
+    const std::string value = axis.print(v);
+    if (!axis.positional && value == axis.print(defaults)) continue;
+    if (!text.empty()) text += '/';
+    // Precision keeps its older bare form ("/float"), which result files already hold.
+    if (!axis.positional && axis.name != "precision") text += std::string(axis.name) + "=";
+    text += value;
+  }
+  return text;
+}
+
 Variant parse_variant(std::string_view text) {
   const auto parts = split(text, '/');
-  if (parts.size() < 3 || parts.size() > 5) {
+  std::vector<std::string_view> positional, named;
+  for (const auto part : parts) {
+    (part.find('=') == std::string_view::npos && named.empty() ? positional : named)
+        .push_back(part);
+  }
+  // Older form: a bare fifth part is the precision.
+  if (positional.size() == 5) {
+    named.insert(named.begin(), positional.back());
+    positional.pop_back();
+  }
+  if (positional.size() < 3 || positional.size() > 4) {
     throw InputError("variant '" + std::string(text) +
                      "' must be loop/order/schedule or loop/order/stencil/schedule[/precision], "
                      "e.g. particle/sorted/static,200");
   }
   Variant variant;
-  variant.loop = parse_loop(parts[0]);
-  variant.order = parse_order(parts[1]);
-  variant.stencil = parts.size() >= 4 ? parse_stencil(parts[2]) : Stencil::kFull;
-  variant.schedule = parse_schedule(parts.size() >= 4 ? parts[3] : parts[2]);
-  if (parts.size() == 5) variant.precision = parse_precision(parts[4]);
+  variant.loop = parse_loop(positional[0]);
+  variant.order = parse_order(positional[1]);
+  if (positional.size() == 4) variant.stencil = parse_stencil(positional[2]);
+  variant.schedule = parse_schedule(positional.back());
+  std::vector<std::string_view> seen;
+  for (const auto part : named) {
+    const auto eq = part.find('=');
+    const std::string_view name = eq == std::string_view::npos ? "precision" : part.substr(0, eq);
+    const VariantAxis& axis = axis_named(name);
+    if (axis.positional || std::find(seen.begin(), seen.end(), name) != seen.end()) {
+      throw InputError("variant '" + std::string(text) + "': axis '" + std::string(name) +
+                       "' given twice");
+    }
+    seen.push_back(name);
+    axis.parse(eq == std::string_view::npos ? part : part.substr(eq + 1), variant);
+  }
+  if (const auto rule = broken_rule(variant)) {
+    throw InputError("variant '" + std::string(text) + "' breaks the rule: " + std::string(*rule));
+  }
   return variant;
+}
+
+std::string variants_help() {
+  std::string text =
+      "Variants are written loop/order/stencil/schedule (loop/order/schedule = full stencil), "
+      "then\nany other axis as name=value when it is not the default (precision also as a bare "
+      "fifth part).\n";
+  for (const VariantAxis& axis : variant_axes()) {
+    text += "  " + std::string(axis.name) + std::string(10 - axis.name.size(), ' ') +
+            std::string(axis.values_help) + "\n";
+  }
+  return text;
 }
 
 std::vector<Variant> enumerate(const VariantSpace& space) {
@@ -135,7 +242,8 @@ std::vector<Variant> enumerate(const VariantSpace& space) {
       for (const auto stencil : space.stencils) {
         for (const auto& schedule : space.schedules) {
           for (const auto precision : space.precisions) {
-            variants.push_back(Variant{loop, order, stencil, schedule, precision});
+            const Variant v{loop, order, stencil, schedule, precision};
+            if (!broken_rule(v)) variants.push_back(v);
           }
         }
       }

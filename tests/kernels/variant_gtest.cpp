@@ -181,6 +181,38 @@ TEST(Variant, BadSchedulesThrowInputError) {
   for (const char* text : {"", "Full", "27"}) EXPECT_THROW(parse_stencil(text), InputError) << text;
 }
 
+// The axis table drives the text form: every axis and value appears in the help, every
+// enumerated variant prints and parses through it, and named parts are read.
+TEST(VariantAxes, TableDrivesHelpParsingAndPrinting) {
+  const std::string help = variants_help();
+  for (const VariantAxis& axis : variant_axes()) {
+    EXPECT_NE(help.find(std::string(axis.name)), std::string::npos) << axis.name;
+    for (const auto value : axis.values) {
+      EXPECT_NE(help.find(std::string(value)), std::string::npos) << axis.name << " " << value;
+    }
+  }
+  EXPECT_EQ(variant_axes().size(), 5u);
+  EXPECT_EQ(parse_variant("particle/sorted/half/static,200/precision=float"),
+            parse_variant("particle/sorted/half/static,200/float"));
+  EXPECT_EQ(parse_variant("cell/morton/guided,4/precision=double"),
+            parse_variant("cell/morton/full/guided,4"));
+  expect_input_error("particle/sorted/full/static/colour=red", "unknown variant axis 'colour'");
+  expect_input_error("particle/sorted/full/static/loop=cell", "axis 'loop' given twice");
+  expect_input_error("particle/sorted/full/static/float/precision=double",
+                     "axis 'precision' given twice");
+  expect_input_error("particle/sorted/full/static/precision=quad", "unknown precision 'quad'");
+}
+
+TEST(VariantAxes, EveryEnumeratedVariantKeepsTheRules) {
+  for (const Variant& v : every_variant()) {
+    EXPECT_FALSE(broken_rule(v).has_value()) << to_string(v);
+  }
+  for (const VariantRule& rule : variant_rules()) {
+    EXPECT_FALSE(rule.description.empty());
+    EXPECT_NE(rule.holds, nullptr);
+  }
+}
+
 TEST(Variant, PaperVariants) {
   const auto variants = paper_variants();
   std::vector<std::string> names;

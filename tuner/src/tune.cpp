@@ -35,18 +35,10 @@ constexpr int kCalibrationSamples = 5;
 
 WorkView view_of(const LoopWork& work) { return {work.tests, work.homes, work.builds}; }
 
+// Every loop/order/stencil/precision the options allow, with a placeholder schedule.
 std::vector<Variant> structures_of(const TuneOptions& options) {
-  std::vector<Variant> result;
-  for (const auto loop : options.loops) {
-    for (const auto order : options.orders) {
-      for (const auto stencil : options.stencils) {
-        for (const auto precision : options.precisions) {
-          result.push_back(Variant{loop, order, stencil, Schedule{}, precision});
-        }
-      }
-    }
-  }
-  return result;
+  return enumerate(VariantSpace{
+      options.loops, options.orders, options.stencils, {Schedule{}}, options.precisions});
 }
 
 Variant with_schedule(Variant v, ScheduleKind kind, int chunk) {

@@ -1,10 +1,16 @@
 // A contact-detection variant as a value: what the CLI parses, the tuner enumerates, the
-// benchmarks register and the tests iterate. Canonical text form:
-// loop/order/stencil/schedule[/float], e.g. "particle/sorted/full/static,200"; the three-part
-// "loop/order/schedule" means the paper's full stencil, a fifth part "float" single
-// precision (double when absent).
+// benchmarks register and the tests iterate. Each axis is declared once, in the table of
+// variant_axes() (variant.cpp): parsing, printing, `contactlab variants` and all_variants()
+// come from it.
+//
+// Text form: the positional axes loop/order/stencil/schedule, e.g.
+// "particle/sorted/full/static,200" (the three-part "loop/order/schedule" means the paper's
+// full stencil), then any other axis as a named part `name=value`, printed only when it is not
+// the default. Precision keeps its older bare form too: a fifth part "float" is
+// "precision=float", and float variants print that way.
 #pragma once
 
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -63,6 +69,35 @@ Precision parse_precision(std::string_view text);
 Schedule parse_schedule(std::string_view text);  // "dynamic" alone means "dynamic,1"
 Variant parse_variant(std::string_view text);
 
+// One axis of the variant space: its name (the key of its named part), what it chooses, its
+// values, and how it reads and writes its part of a Variant. Adding an axis = a field of
+// Variant, an entry in the table, and (to enumerate it) a field of VariantSpace.
+struct VariantAxis {
+  std::string_view name;
+  std::string_view help;
+  std::vector<std::string_view> values;  // schedule: its kinds (a chunk may follow)
+  std::string_view values_help;          // the values in words, for `contactlab variants`
+  bool positional = false;               // one of the leading slash-separated parts
+  void (*parse)(std::string_view text, Variant& into) = nullptr;
+  std::string (*print)(const Variant& variant) = nullptr;
+};
+const std::vector<VariantAxis>& variant_axes();
+
+// A rule between axes that every variant must keep (cf. AutoPas's
+// Configuration::hasCompatibleValues): parse_variant rejects a variant that breaks one and
+// enumerate() leaves it out. The detection axes are all compatible today; the DEM force
+// accumulation axis will add "accumulate only with the half stencil".
+struct VariantRule {
+  std::string_view description;
+  bool (*holds)(const Variant& variant) = nullptr;
+};
+const std::vector<VariantRule>& variant_rules();
+// The description of the first rule `variant` breaks, or nothing.
+std::optional<std::string_view> broken_rule(const Variant& variant);
+
+// The axes, their values and the text form in words (the body of `contactlab variants`).
+std::string variants_help();
+
 // A grid of variants: the cartesian product of the listed choices.
 struct VariantSpace {
   std::vector<LoopKind> loops;
@@ -72,6 +107,7 @@ struct VariantSpace {
   std::vector<Precision> precisions{Precision::kDouble};
 };
 
+// The product in the table's axis order, without the variants that break a rule.
 std::vector<Variant> enumerate(const VariantSpace& space);
 
 // The five configurations of Takagi et al. (Tables 2-5 and 7; chunk 200 for Table 7).
