@@ -1,5 +1,9 @@
-// The per-thread PAPI path, proved with software events that exist even where the machine
+// The real PAPI backend, proved with software events that exist even where the machine
 // exposes no hardware counters (virtual machines): perf::TASK-CLOCK and perf::PAGE-FAULTS.
+// Where PAPI cannot count them (no PAPI, perf_event component disabled), these tests skip with
+// the reason papi_probe gets from PAPI, decided before the test runs, never from its own result;
+// once PAPI says the events are countable, the record must be available. The per-thread logic
+// itself is tested on every machine in thread_counters_gtest.cpp.
 #include <gtest/gtest.h>
 
 #include "contactlab/kernels/error.hpp"
@@ -11,6 +15,9 @@ namespace contactlab::tuner {
 namespace {
 
 const std::vector<std::string> kSoftware{"perf::TASK-CLOCK", "perf::PAGE-FAULTS"};
+
+// Why PAPI cannot count the software events here, or "" when it can.
+std::string software_events_obstacle() { return papi_probe(kSoftware).reason; }
 
 // GTEST_SKIP returns from the function it is in, so this is a macro.
 #define SKIP_WITHOUT_PAPI() \
@@ -28,7 +35,6 @@ CounterRecord count_detection(std::uint64_t n, int threads) {
   const SceneSpec spec = test::small_clustered(n, 0.01);
   const Scene scene = generate_scene(spec);
   PapiCounters counters(kSoftware);
-  if (!counters.available()) return counters.record();
   ContactDetector detector;
   DetectOptions options{parse_variant("particle/sorted/static"), spec.diameter, threads, &counters};
   detector.run(scene, options);
@@ -42,9 +48,9 @@ TEST(Papi, InitialisesAndReportsItsVersion) {
 }
 
 TEST(Papi, TaskClockCoversEveryThread) {
-  SKIP_WITHOUT_PAPI();
+  if (const auto why = software_events_obstacle(); !why.empty()) GTEST_SKIP() << why;
   const CounterRecord r = count_detection(20000, 2);
-  if (!r.available) GTEST_SKIP() << "software events not countable here: " << r.reason;
+  ASSERT_TRUE(r.available) << r.reason;
   EXPECT_EQ(r.source, "papi");
   EXPECT_EQ(r.counted_runs, 1);
   const EventCount& clock = event(r, "perf::TASK-CLOCK");
@@ -59,27 +65,30 @@ TEST(Papi, TaskClockCoversEveryThread) {
 }
 
 TEST(Papi, PageFaultsRiseWithN) {
-  SKIP_WITHOUT_PAPI();
+  if (const auto why = software_events_obstacle(); !why.empty()) GTEST_SKIP() << why;
   const CounterRecord small = count_detection(2000, 2);
-  if (!small.available) GTEST_SKIP() << "software events not countable here: " << small.reason;
+  ASSERT_TRUE(small.available) << small.reason;
   const CounterRecord large = count_detection(200000, 2);
   ASSERT_TRUE(large.available) << large.reason;
   EXPECT_GT(event(large, "perf::PAGE-FAULTS").total, event(small, "perf::PAGE-FAULTS").total);
 }
 
 TEST(Papi, CountsSumOverRegions) {
-  SKIP_WITHOUT_PAPI();
+  if (const auto why = software_events_obstacle(); !why.empty()) GTEST_SKIP() << why;
   const SceneSpec spec = test::small_clustered(5000);
   const Scene scene = generate_scene(spec);
   PapiCounters counters(kSoftware);
-  if (!counters.available()) GTEST_SKIP() << counters.record().reason;
+  ASSERT_TRUE(counters.available()) << counters.record().reason;
   ContactDetector detector;
   DetectOptions options{parse_variant("cell/unsorted/dynamic,4"), spec.diameter, 2, &counters};
   detector.run(scene, options);
   detector.run(scene, options);
   const CounterRecord r = counters.record();
+  ASSERT_TRUE(r.available) << r.reason;
   EXPECT_EQ(r.counted_runs, 2);
-  EXPECT_EQ(event(r, "perf::TASK-CLOCK").per_thread.size(), 2u);
+  const EventCount& clock = event(r, "perf::TASK-CLOCK");
+  ASSERT_EQ(clock.per_thread.size(), 2u);
+  EXPECT_EQ(clock.per_thread[0] + clock.per_thread[1], clock.total);
 }
 
 TEST(Papi, UnknownEventNameIsAnInputError) {
@@ -91,12 +100,35 @@ TEST(Papi, UnknownEventNameIsAnInputError) {
     EXPECT_NE(std::string(e.what()).find("unknown PAPI event 'PAPI_NOT_AN_EVENT_XYZ'"),
               std::string::npos);
   }
+}
+
+TEST(Papi, UnknownNativeEventIsAnInputError) {
+  SKIP_WITHOUT_PAPI();
+  if (const auto why = papi_disabled_component("perf::NO-SUCH-EVENT"); !why.empty()) {
+    GTEST_SKIP() << "a typo cannot be told from an event of a disabled component: " << why;
+  }
   EXPECT_THROW(PapiCounters({"perf::NO-SUCH-EVENT"}), InputError);
 }
 
-// The cache-miss formulas: counted with a rate where the machine has the events, otherwise a
-// recorded reason. Never silent zeros.
+// On machines where PAPI disables perf_event (no PMU), its events cannot even be listed: they
+// are recorded unavailable with PAPI's reason, not rejected as typos.
+TEST(Papi, EventOfADisabledComponentIsRecordedWithPapisReason) {
+  SKIP_WITHOUT_PAPI();
+  const std::string why = papi_disabled_component("perf::TASK-CLOCK");
+  if (why.empty()) GTEST_SKIP() << "PAPI's component of perf::TASK-CLOCK is enabled here";
+  EXPECT_EQ(why.rfind("PAPI component perf_event is disabled: ", 0), 0u) << why;
+  PapiCounters counters({"perf::TASK-CLOCK"});
+  EXPECT_FALSE(counters.available());
+  const CounterRecord r = counters.record();
+  EXPECT_FALSE(r.available);
+  EXPECT_EQ(r.reason, "cannot count the requested events here: perf::TASK-CLOCK: " + why);
+  EXPECT_FALSE(papi_probe({"perf::TASK-CLOCK"}).countable);
+}
+
+// The cache-miss formulas: counted with a rate where PAPI says the machine has the events,
+// otherwise a recorded reason. Never silent zeros.
 TEST(Papi, CacheMissRatesOrAReason) {
+  const bool countable = test::papi_counts_a_miss_formula();
   const SceneSpec spec = test::small_clustered(5000);
   const Scene scene = generate_scene(spec);
   PapiCounters counters;
@@ -105,7 +137,8 @@ TEST(Papi, CacheMissRatesOrAReason) {
   detector.run(scene, options);
   const CounterRecord r = counters.record();
   EXPECT_EQ(r.source, "papi");
-  if (r.available) {
+  ASSERT_EQ(r.available, countable) << r.reason;
+  if (countable) {
     EXPECT_TRUE(r.l1_miss_percent.has_value() || r.l2_miss_percent.has_value());
     if (r.l1_miss_percent) {
       EXPECT_FALSE(r.l1_formula.empty());
@@ -132,9 +165,10 @@ TEST(Papi, KnownButUncountableEventIsRecorded) {
 }
 
 TEST(Papi, MeasureDetectionKeepsCountersOutOfTheTimedRuns) {
+  if (const auto why = software_events_obstacle(); !why.empty()) GTEST_SKIP() << why;
   const SceneSpec spec = test::small_clustered(3000);
   const Scene scene = generate_scene(spec);
-  PapiCounters counters(papi_info().initialized ? kSoftware : std::vector<std::string>{});
+  PapiCounters counters(kSoftware);
   MeasureOptions measure;
   measure.repetition.warmup = 0;
   measure.repetition.repeat = 3;
@@ -145,9 +179,8 @@ TEST(Papi, MeasureDetectionKeepsCountersOutOfTheTimedRuns) {
       measure_detection(detector, scene, describe_generated_scene(spec, scene), options, measure);
   ASSERT_EQ(run.counters.size(), 1u);
   EXPECT_EQ(run.counters[0].source, "papi");
-  if (run.counters[0].available) {
-    EXPECT_EQ(run.counters[0].counted_runs, 1);
-  }
+  ASSERT_TRUE(run.counters[0].available) << run.counters[0].reason;
+  EXPECT_EQ(run.counters[0].counted_runs, 1);
   EXPECT_EQ(run.samples.total_s.size(), 3u);
 }
 

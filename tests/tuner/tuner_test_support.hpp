@@ -10,6 +10,7 @@
 #include <string>
 
 #include "contactlab/kernels/scene_generate.hpp"
+#include "contactlab/tuner/papi_counters.hpp"
 
 namespace contactlab::test {
 
@@ -81,6 +82,17 @@ inline SceneSpec small_clustered(std::uint64_t n, double diameter = 0.02) {
   spec.diameter = diameter;
   spec.seed = 7;
   return spec;
+}
+
+// Whether PAPI says it can count the events of some L1 or L2 miss formula here: then --papi
+// must give a record with counts, else one with a reason. Asked of PAPI, not of the run.
+inline bool papi_counts_a_miss_formula() {
+  for (const auto* formulas : {&tuner::papi_l1_formulas(), &tuner::papi_l2_formulas()}) {
+    for (const auto& f : *formulas) {
+      if (tuner::papi_probe(f.events()).countable) return true;
+    }
+  }
+  return false;
 }
 
 }  // namespace contactlab::test

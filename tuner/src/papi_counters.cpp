@@ -4,10 +4,7 @@
 #include <pthread.h>
 
 #include <algorithm>
-#include <mutex>
 #include <optional>
-
-#include "contactlab/kernels/error.hpp"
 
 #if CONTACTLAB_HAVE_PAPI
 #include <papi.h>
@@ -15,51 +12,13 @@
 
 namespace contactlab::tuner {
 
-std::string PapiFormula::text() const {
-  auto sum = [](const std::vector<std::string>& names) {
-    std::string s;
-    for (const auto& n : names) s += (s.empty() ? "" : " + ") + n;
-    return names.size() > 1 ? "(" + s + ")" : s;
-  };
-  return "100 * " + sum(numerator) + " / " + sum(denominator);
-}
-
-const std::vector<PapiFormula>& papi_l1_formulas() {
-  static const std::vector<PapiFormula> formulas{
-      {{"PAPI_L1_DCM"}, {"PAPI_LST_INS"}, "load/store instructions"},
-      {{"PAPI_L1_DCM"}, {"PAPI_LD_INS", "PAPI_SR_INS"}, "load/store instructions"},
-      {{"PAPI_L1_DCM"}, {"PAPI_L1_DCA"}, "accesses"},
-      {{"perf::L1-DCACHE-LOAD-MISSES"}, {"perf::L1-DCACHE-LOADS"}, "loads"},
-  };
-  return formulas;
-}
-
-const std::vector<PapiFormula>& papi_l2_formulas() {
-  static const std::vector<PapiFormula> formulas{
-      {{"PAPI_L2_DCM"}, {"PAPI_LST_INS"}, "load/store instructions"},
-      {{"PAPI_L2_DCM"}, {"PAPI_LD_INS", "PAPI_SR_INS"}, "load/store instructions"},
-      {{"PAPI_L2_TCM"},
-       {"PAPI_LST_INS"},
-       "load/store instructions (L2 misses include instruction fetches)"},
-      // A local rate (misses per L2 access), not comparable with the per-instruction ones.
-      {{"PAPI_L2_DCM"}, {"PAPI_L2_DCA"}, "L2 data accesses (local miss rate)"},
-  };
-  return formulas;
-}
-
 namespace {
-
-[[maybe_unused]] std::vector<std::string> formula_events(const PapiFormula& f) {
-  std::vector<std::string> events = f.numerator;
-  events.insert(events.end(), f.denominator.begin(), f.denominator.end());
-  return events;
-}
 
 std::vector<std::string> all_formula_events() {
   std::vector<std::string> names;
   for (const auto* list : {&papi_l1_formulas(), &papi_l2_formulas()}) {
     for (const auto& f : *list) {
-      for (const auto& e : formula_events(f)) {
+      for (const auto& e : f.events()) {
         if (std::find(names.begin(), names.end(), e) == names.end()) names.push_back(e);
       }
     }
@@ -67,38 +26,11 @@ std::vector<std::string> all_formula_events() {
   return names;
 }
 
-// 100 * sum(numerator) / sum(denominator) from named totals; nullopt when the denominator is 0
-// or an event is missing.
-std::optional<double> rate(const PapiFormula& f, const std::vector<EventCount>& events) {
-  auto total = [&](const std::string& name) -> std::optional<double> {
-    for (const auto& e : events) {
-      if (e.name == name) return static_cast<double>(e.total);
-    }
-    return std::nullopt;
-  };
-  double num = 0.0, den = 0.0;
-  for (const auto& n : f.numerator) {
-    const auto v = total(n);
-    if (!v) return std::nullopt;
-    num += *v;
-  }
-  for (const auto& n : f.denominator) {
-    const auto v = total(n);
-    if (!v) return std::nullopt;
-    den += *v;
-  }
-  if (den <= 0.0) return std::nullopt;
-  return 100.0 * num / den;
+[[maybe_unused]] std::string join(const std::vector<std::string>& items, const char* separator) {
+  std::string s;
+  for (const auto& i : items) s += (s.empty() ? "" : separator) + i;
+  return s;
 }
-
-[[maybe_unused]] bool contains_all(const std::vector<std::string>& set,
-                                   const std::vector<std::string>& wanted) {
-  return std::all_of(wanted.begin(), wanted.end(), [&](const std::string& w) {
-    return std::find(set.begin(), set.end(), w) != set.end();
-  });
-}
-
-constexpr const char* kRegion = "detection loop, every OpenMP thread (one event set each), summed";
 
 }  // namespace
 
@@ -113,9 +45,39 @@ std::string papi_error(int code) {
   return s ? std::string(s) : fmt::format("PAPI error {}", code);
 }
 
+// Why the component that would count `name` is disabled ("PAPI component perf_event is
+// disabled: Error libpfm4 no default PMU found"), or nullopt when it is enabled or unknown. A
+// disabled component lists no native events, so "perf::TASK-CLOCK" does not resolve there and
+// would look like a typo: its prefix ("perf", the component's short name) finds the component.
+// Presets resolve even then, and PAPI names their component.
+std::optional<std::string> disabled_component(const std::string& name) {
+  int component = -1;
+  if (const auto separator = name.find("::"); separator != std::string::npos) {
+    const std::string prefix = name.substr(0, separator);
+    for (int c = 0; c < PAPI_num_components() && component < 0; ++c) {
+      const PAPI_component_info_t* info = PAPI_get_component_info(c);
+      if (info && (prefix == info->short_name || prefix == info->name)) component = c;
+    }
+  }
+  if (component < 0) {
+    int code = 0;
+    if (PAPI_event_name_to_code(name.c_str(), &code) == PAPI_OK) {
+      component = PAPI_get_event_component(code);
+    }
+  }
+  if (component < 0) return std::nullopt;
+  const PAPI_component_info_t* info = PAPI_get_component_info(component);
+  // PAPI_EDELAY_INIT: initialised on first use of its events, not disabled.
+  if (!info || info->disabled == PAPI_OK || info->disabled == PAPI_EDELAY_INIT) return std::nullopt;
+  return fmt::format("PAPI component {} is disabled: {}", info->name, info->disabled_reason);
+}
+
 // Adds `names` to a fresh event set on the calling thread, starts and stops it. Returns the
 // first failure ("NAME: reason" or "PAPI_start: reason"), or nullopt when the set works.
 std::optional<std::string> try_event_set(const std::vector<std::string>& names) {
+  for (const auto& name : names) {
+    if (const auto why = disabled_component(name)) return name + ": " + *why;
+  }
   int set = PAPI_NULL;
   int rc = PAPI_create_eventset(&set);
   if (rc != PAPI_OK) return "PAPI_create_eventset: " + papi_error(rc);
@@ -151,6 +113,78 @@ bool is_known_preset(const std::string& name) {
   } while (PAPI_enum_event(&code, PAPI_ENUM_ALL) == PAPI_OK);
   return false;
 }
+
+class PapiBackend final : public CounterBackend {
+ public:
+  std::string name() const override { return "papi"; }
+
+  std::string unavailable_reason() const override {
+    const PapiInfo& info = papi_info();
+    return info.initialized ? "" : info.error;
+  }
+
+  std::optional<std::string> unknown_event(const std::string& event) const override {
+    int code = 0;
+    const int rc = PAPI_event_name_to_code(event.c_str(), &code);
+    if (rc == PAPI_OK || is_known_preset(event) || disabled_component(event)) return std::nullopt;
+    return fmt::format(
+        "unknown PAPI event '{}': not a PAPI preset nor a native event of this machine ({}); "
+        "list them with papi_avail and papi_native_avail",
+        event, papi_error(rc));
+  }
+
+  std::optional<std::string> try_events(const std::vector<std::string>& events) override {
+    return try_event_set(events);
+  }
+
+  void prepare(const std::vector<std::string>& events, int threads) override {
+    codes_.clear();
+    for (const auto& name : events) {
+      int code = 0;
+      PAPI_event_name_to_code(name.c_str(), &code);  // try_events accepted every name
+      codes_.push_back(code);
+    }
+    sets_.assign(threads, PAPI_NULL);
+  }
+
+  CounterStatus start(int thread) noexcept override {
+    int& set = sets_[thread];
+    int rc = PAPI_register_thread();
+    if (rc != PAPI_OK) return {"PAPI_register_thread", rc};
+    rc = PAPI_create_eventset(&set);
+    if (rc != PAPI_OK) return {"PAPI_create_eventset", rc};
+    rc = PAPI_add_events(set, codes_.data(), static_cast<int>(codes_.size()));
+    if (rc != PAPI_OK) {
+      release(set);
+      return {"PAPI_add_events", rc};
+    }
+    rc = PAPI_start(set);
+    if (rc != PAPI_OK) {
+      release(set);
+      return {"PAPI_start", rc};
+    }
+    return {};
+  }
+
+  CounterStatus stop(int thread, std::span<long long> values) noexcept override {
+    int& set = sets_[thread];
+    const int rc = PAPI_stop(set, values.data());
+    release(set);
+    if (rc != PAPI_OK) return {"PAPI_stop", rc};
+    return {};
+  }
+
+  std::string describe(int code) const override { return papi_error(code); }
+
+ private:
+  static void release(int& set) noexcept {
+    PAPI_cleanup_eventset(set);
+    PAPI_destroy_eventset(&set);
+  }
+
+  std::vector<int> codes_;
+  std::vector<int> sets_;  // per thread; each thread touches only its own
+};
 
 }  // namespace
 
@@ -196,237 +230,65 @@ const PapiInfo& papi_info() {
   return info;
 }
 
-struct PapiCounters::Impl {
-  struct ThreadSlot {
-    int event_set = PAPI_NULL;
-    std::vector<long long> values;
-    int error = PAPI_OK;
-    std::string step;  // the call that failed
-  };
-
-  std::vector<std::string> names;
-  std::vector<int> codes;
-  std::optional<PapiFormula> l1, l2;
-  bool available = false;
-  std::string reason;
-  std::vector<std::string> notes;
-  std::vector<ThreadSlot> slots;                   // this region's threads
-  std::vector<std::vector<std::uint64_t>> totals;  // [thread][event] over counted regions
-  int counted_runs = 0;
-  bool in_region = false;
-};
-
-PapiCounters::PapiCounters(std::vector<std::string> events) : impl_(std::make_unique<Impl>()) {
-  Impl& m = *impl_;
+PapiProbe papi_probe(const std::vector<std::string>& events) {
   const PapiInfo& info = papi_info();
-  if (!info.initialized) {
-    m.reason = info.error;
-    m.names = std::move(events);
-    return;
+  if (!info.initialized) return {false, "PAPI cannot be initialised here: " + info.error};
+  if (const auto failure = try_event_set(events)) {
+    return {false, fmt::format("PAPI cannot count {} here: {}", join(events, ", "), *failure)};
   }
-  if (!events.empty()) {
-    for (const auto& name : events) {
-      int code = 0;
-      const int rc = PAPI_event_name_to_code(name.c_str(), &code);
-      if (rc != PAPI_OK && !is_known_preset(name)) {
-        throw InputError(fmt::format(
-            "unknown PAPI event '{}': not a PAPI preset nor a native event of this machine ({}); "
-            "list them with papi_avail and papi_native_avail",
-            name, papi_error(rc)));
-      }
-    }
-    m.names = std::move(events);
-    if (const auto failure = try_event_set(m.names)) {
-      m.reason = "cannot count the requested events here: " + *failure;
-      return;
-    }
-    for (const auto& f : papi_l1_formulas()) {
-      if (contains_all(m.names, formula_events(f))) {
-        m.l1 = f;
-        break;
-      }
-    }
-    for (const auto& f : papi_l2_formulas()) {
-      if (contains_all(m.names, formula_events(f))) {
-        m.l2 = f;
-        break;
-      }
-    }
-  } else {
-    // First usable candidate of each level, with the events of both fitting in one set.
-    std::vector<std::string> failures;
-    for (auto [formulas, chosen] :
-         {std::pair{&papi_l1_formulas(), &m.l1}, std::pair{&papi_l2_formulas(), &m.l2}}) {
-      for (const auto& f : *formulas) {
-        std::vector<std::string> trial = m.names;
-        for (const auto& e : formula_events(f)) {
-          if (std::find(trial.begin(), trial.end(), e) == trial.end()) trial.push_back(e);
-        }
-        if (const auto failure = try_event_set(trial)) {
-          failures.push_back(f.text() + " (" + *failure + ")");
-          continue;
-        }
-        m.names = std::move(trial);
-        *chosen = f;
-        break;
-      }
-    }
-    if (!m.l1 && !m.l2) {
-      std::string list;
-      for (const auto& f : failures) list += (list.empty() ? "" : "; ") + f;
-      m.reason = "no L1 or L2 data-cache miss formula can be counted here: " + list;
-      return;
-    }
-    if (!m.l1) m.notes.push_back("no L1 formula can be counted here");
-    if (!m.l2) m.notes.push_back("no L2 formula can be counted here");
-  }
-  for (const auto& name : m.names) {
-    int code = 0;
-    PAPI_event_name_to_code(name.c_str(), &code);
-    m.codes.push_back(code);
-  }
-  m.available = true;
+  return {true, ""};
 }
 
-PapiCounters::~PapiCounters() = default;
-
-bool PapiCounters::available() const { return impl_->available; }
-const std::vector<std::string>& PapiCounters::event_names() const { return impl_->names; }
-
-void PapiCounters::region_begin(int threads) {
-  Impl& m = *impl_;
-  m.in_region = m.available;
-  if (!m.available) return;
-  m.slots.assign(threads, {});
-  for (auto& slot : m.slots) slot.values.assign(m.codes.size(), 0);
-  if (m.totals.size() < static_cast<std::size_t>(threads)) {
-    m.totals.resize(threads, std::vector<std::uint64_t>(m.codes.size(), 0));
-  }
+std::string papi_disabled_component(const std::string& event) {
+  if (!papi_info().initialized) return "";
+  return disabled_component(event).value_or("");
 }
 
-// Runs on each OpenMP thread: nothing here may throw, so failures are kept for region_end.
-void PapiCounters::thread_begin(int thread) {
-  Impl& m = *impl_;
-  if (!m.in_region) return;
-  Impl::ThreadSlot& slot = m.slots[thread];
-  auto check = [&](int rc, const char* step) {
-    if (rc != PAPI_OK && slot.error == PAPI_OK) {
-      slot.error = rc;
-      slot.step = step;
-    }
-    return rc == PAPI_OK;
-  };
-  if (!check(PAPI_register_thread(), "PAPI_register_thread")) return;
-  if (!check(PAPI_create_eventset(&slot.event_set), "PAPI_create_eventset")) return;
-  if (!check(PAPI_add_events(slot.event_set, m.codes.data(), static_cast<int>(m.codes.size())),
-             "PAPI_add_events")) {
-    return;
-  }
-  check(PAPI_start(slot.event_set), "PAPI_start");
-}
-
-void PapiCounters::thread_end(int thread) {
-  Impl& m = *impl_;
-  if (!m.in_region) return;
-  Impl::ThreadSlot& slot = m.slots[thread];
-  if (slot.event_set == PAPI_NULL) return;
-  if (slot.error == PAPI_OK) {
-    const int rc = PAPI_stop(slot.event_set, slot.values.data());
-    if (rc != PAPI_OK) {
-      slot.error = rc;
-      slot.step = "PAPI_stop";
-    }
-  }
-  PAPI_cleanup_eventset(slot.event_set);
-  PAPI_destroy_eventset(&slot.event_set);
-}
-
-void PapiCounters::region_end() {
-  Impl& m = *impl_;
-  if (!m.in_region) return;
-  m.in_region = false;
-  for (std::size_t t = 0; t < m.slots.size(); ++t) {
-    const auto& slot = m.slots[t];
-    if (slot.error != PAPI_OK) {
-      m.available = false;
-      m.reason = fmt::format("thread {}: {}: {}", t, slot.step, papi_error(slot.error));
-      return;
-    }
-  }
-  for (std::size_t t = 0; t < m.slots.size(); ++t) {
-    for (std::size_t e = 0; e < m.codes.size(); ++e) {
-      m.totals[t][e] += static_cast<std::uint64_t>(std::max(0LL, m.slots[t].values[e]));
-    }
-  }
-  ++m.counted_runs;
-}
+std::unique_ptr<CounterBackend> make_papi_backend() { return std::make_unique<PapiBackend>(); }
 
 #else  // built without PAPI
+
+namespace {
+
+constexpr const char* kNoPapi = "built without PAPI";
+
+class NoPapiBackend final : public CounterBackend {
+ public:
+  std::string name() const override { return "papi"; }
+  std::string unavailable_reason() const override { return kNoPapi; }
+  std::optional<std::string> unknown_event(const std::string&) const override {
+    return std::nullopt;
+  }
+  std::optional<std::string> try_events(const std::vector<std::string>&) override {
+    return kNoPapi;
+  }
+  void prepare(const std::vector<std::string>&, int) override {}
+  CounterStatus start(int) noexcept override { return {"start", 0}; }
+  CounterStatus stop(int, std::span<long long>) noexcept override { return {"stop", 0}; }
+  std::string describe(int) const override { return kNoPapi; }
+};
+
+}  // namespace
 
 const PapiInfo& papi_info() {
   static const PapiInfo info = [] {
     PapiInfo i;
-    i.error = "built without PAPI";
-    for (const auto& name : all_formula_events())
-      i.cache_events.push_back({name, false, "built without PAPI"});
+    i.error = kNoPapi;
+    for (const auto& name : all_formula_events()) i.cache_events.push_back({name, false, kNoPapi});
     return i;
   }();
   return info;
 }
 
-struct PapiCounters::Impl {
-  std::vector<std::string> names;
-  std::optional<PapiFormula> l1, l2;
-  bool available = false;
-  std::string reason = "built without PAPI";
-  std::vector<std::string> notes;
-  std::vector<std::vector<std::uint64_t>> totals;
-  int counted_runs = 0;
-};
+PapiProbe papi_probe(const std::vector<std::string>&) { return {false, kNoPapi}; }
 
-PapiCounters::PapiCounters(std::vector<std::string> events) : impl_(std::make_unique<Impl>()) {
-  impl_->names = std::move(events);
-}
-PapiCounters::~PapiCounters() = default;
-bool PapiCounters::available() const { return false; }
-const std::vector<std::string>& PapiCounters::event_names() const { return impl_->names; }
-void PapiCounters::region_begin(int) {}
-void PapiCounters::thread_begin(int) {}
-void PapiCounters::thread_end(int) {}
-void PapiCounters::region_end() {}
+std::string papi_disabled_component(const std::string&) { return ""; }
+
+std::unique_ptr<CounterBackend> make_papi_backend() { return std::make_unique<NoPapiBackend>(); }
 
 #endif
 
-CounterRecord PapiCounters::record() const {
-  const Impl& m = *impl_;
-  CounterRecord r;
-  r.source = "papi";
-  r.region = kRegion;
-  r.notes = m.notes;
-  if (!m.available || m.counted_runs == 0) {
-    r.available = false;
-    r.reason = !m.reason.empty() ? m.reason : "no run was counted";
-    return r;
-  }
-  r.available = true;
-  r.counted_runs = m.counted_runs;
-  for (std::size_t e = 0; e < m.names.size(); ++e) {
-    EventCount count{m.names[e], 0, {}};
-    for (const auto& thread : m.totals) {
-      count.per_thread.push_back(thread[e]);
-      count.total += thread[e];
-    }
-    r.events.push_back(std::move(count));
-  }
-  if (m.l1) {
-    r.l1_miss_percent = rate(*m.l1, r.events);
-    r.l1_formula = m.l1->text() + " (per " + m.l1->basis + ")";
-  }
-  if (m.l2) {
-    r.l2_miss_percent = rate(*m.l2, r.events);
-    r.l2_formula = m.l2->text() + " (per " + m.l2->basis + ")";
-  }
-  return r;
-}
+PapiCounters::PapiCounters(std::vector<std::string> events)
+    : ThreadCounters(make_papi_backend(), std::move(events)) {}
 
 }  // namespace contactlab::tuner

@@ -17,8 +17,8 @@ namespace contactlab::tuner {
 struct MeasureOptions {
   RepetitionPolicy repetition;
   // Counted in one extra run after the timed ones, so that creating and starting event sets
-  // never enters the timed samples. Not owned.
-  PapiCounters* papi = nullptr;
+  // never enters the timed samples. Not owned. Usually PapiCounters; any backend works.
+  ThreadCounters* papi = nullptr;
   // The status is "invalid" when the contact count differs from this (or between repetitions).
   std::optional<std::uint64_t> expected_contact_pairs;
 };

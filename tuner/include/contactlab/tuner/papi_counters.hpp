@@ -1,30 +1,19 @@
-// Hardware (or software) event counts through PAPI, one event set per OpenMP thread, started
-// and stopped inside the parallel region around the detection loop and summed.
+// Hardware (or software) event counts through PAPI: ThreadCounters over the PAPI backend, one
+// event set per OpenMP thread, started and stopped inside the parallel region and summed.
 //
-// Degrades like Google Benchmark's perf counters: where PAPI is missing, or the events cannot
-// be added or started (virtual machines without a PMU), the observer does nothing and its
-// record says available: false with PAPI's reason; the run itself always completes.
+// Where PAPI is missing, its component is disabled (virtual machines without a PMU) or the
+// events cannot be added or started, the record says available: false with PAPI's reason; the
+// run itself always completes.
 #pragma once
 
 #include <memory>
 #include <string>
 #include <vector>
 
-#include "contactlab/kernels/detector.hpp"
-#include "contactlab/tuner/counter_record.hpp"
+#include "contactlab/tuner/counter_backend.hpp"
+#include "contactlab/tuner/thread_counters.hpp"
 
 namespace contactlab::tuner {
-
-// One way to compute a miss rate: 100 * sum(numerator) / sum(denominator). The candidates are
-// tried in order, because presets differ between CPUs (many lack PAPI_LST_INS or PAPI_L2_DCA).
-struct PapiFormula {
-  std::vector<std::string> numerator;
-  std::vector<std::string> denominator;
-  std::string basis;         // "load/store instructions", "accesses", "loads"
-  std::string text() const;  // "100 * PAPI_L1_DCM / PAPI_LST_INS"
-};
-const std::vector<PapiFormula>& papi_l1_formulas();
-const std::vector<PapiFormula>& papi_l2_formulas();
 
 struct PapiEventProbe {
   std::string name;
@@ -45,31 +34,33 @@ struct PapiInfo {
 };
 const PapiInfo& papi_info();
 
-class PapiCounters final : public DetectionObserver {
+// Whether PAPI can count `events` together on this machine, asked of PAPI the way papi_info
+// probes (add to one event set, start, stop) after checking each event's component. The tests
+// of the real backend skip with `reason` when not countable, and never on their own result.
+struct PapiProbe {
+  bool countable = false;
+  std::string reason;  // why not, e.g. "perf::TASK-CLOCK: PAPI component perf_event is
+                       // disabled: Error libpfm4 no default PMU found"; empty when countable
+};
+PapiProbe papi_probe(const std::vector<std::string>& events);
+
+// Why the PAPI component that would count `event` is disabled here ("PAPI component perf_event
+// is disabled: Error libpfm4 no default PMU found"), found by the native prefix ("perf::") or
+// the event's code; "" when it is enabled, unknown, or PAPI is missing.
+std::string papi_disabled_component(const std::string& event);
+
+// The real backend (PAPI_add_events / PAPI_start / PAPI_stop per thread). In a build without
+// PAPI every answer is "built without PAPI".
+std::unique_ptr<CounterBackend> make_papi_backend();
+
+class PapiCounters final : public ThreadCounters {
  public:
   // `events` empty: the L1 and L2 data-cache miss formulas, first usable candidate of each.
   // Otherwise exactly those events (rates are derived when they form a known formula).
   // Throws InputError for a name that is neither a PAPI preset nor a native event here (a
-  // typo); a known event that this machine cannot count is recorded as unavailable instead.
+  // typo); a known event that this machine cannot count, or an event of a component PAPI
+  // reports disabled, is recorded as unavailable instead, with PAPI's reason.
   explicit PapiCounters(std::vector<std::string> events = {});
-  ~PapiCounters() override;
-  PapiCounters(const PapiCounters&) = delete;
-  PapiCounters& operator=(const PapiCounters&) = delete;
-
-  bool available() const;
-  const std::vector<std::string>& event_names() const;
-
-  void region_begin(int threads) override;
-  void thread_begin(int thread) override;
-  void thread_end(int thread) override;
-  void region_end() override;
-
-  // Totals over every counted region and thread.
-  CounterRecord record() const;
-
- private:
-  struct Impl;
-  std::unique_ptr<Impl> impl_;
 };
 
 }  // namespace contactlab::tuner
