@@ -4,6 +4,7 @@
 
 #include <filesystem>
 
+#include "contactlab/kernels/scene_options.hpp"
 #include "contactlab/tuner/papi_counters.hpp"
 #include "contactlab/tuner/result_schema.hpp"
 #include "tuner_test_support.hpp"
@@ -125,6 +126,18 @@ TEST(DetectCli, BadInputIsOneClearError) {
   expect_rejected("--adaptive --target-ci 2", "--target-ci");
   if (papi_info().initialized)
     expect_rejected("--papi-events PAPI_NOT_AN_EVENT_XYZ", "unknown PAPI event");
+}
+
+// The scene options come from the library's table (the one the experiment configs read).
+TEST(DetectCli, SceneOptionsComeFromTheTable) {
+  for (const char* command : {" scene --help", " detect --help", " tune --help", " demo --help"}) {
+    const auto r = test::run_command(test::contactlab_exe() + command);
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    for (const SceneParameter& parameter : kSceneParameters) {
+      EXPECT_NE(r.output.find(std::string(parameter.option)), std::string::npos)
+          << command << " lacks " << parameter.option;
+    }
+  }
 }
 
 }  // namespace

@@ -5,10 +5,13 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <optional>
+#include <type_traits>
+#include <variant>
 
 #include "contactlab/kernels/detector.hpp"
 #include "contactlab/kernels/error.hpp"
 #include "contactlab/kernels/rng.hpp"
+#include "contactlab/kernels/scene_options.hpp"
 #include "contactlab/tuner/json_reader.hpp"
 
 namespace contactlab::tuner {
@@ -63,14 +66,18 @@ ExperimentScene parse_scene(const JsonIn& in) {
     } catch (const InputError& e) {
       kind.fail(e.what());
     }
-    SceneSpec& spec = scene.spec;
-    spec.n = number<std::uint64_t>(o, "n", std::nullopt, 0, UINT32_MAX - 1);
-    spec.seed = number<std::uint64_t>(o, "seed", spec.seed, 0, UINT64_MAX);
-    spec.core = number<double>(o, "core", spec.core, 1e-6, 100.0);
-    spec.background = number<double>(o, "background", spec.background, 0.0, 1.0);
-    spec.blob_count = number<int>(o, "blobs", spec.blob_count, 1, 1'000'000);
-    spec.blob_radius = number<double>(o, "blob_radius", spec.blob_radius, 1e-6, 0.5);
-    spec.size_ratio = number<double>(o, "size_ratio", spec.size_ratio, 1.0, 1e6);
+    // The generator's numbers, from the one table the CLI's options are made from too.
+    for (const SceneParameter& parameter : kSceneParameters) {
+      std::visit(
+          [&](const auto& field) {
+            using T = std::remove_cvref_t<decltype(scene.spec.*field.member)>;
+            T& value = scene.spec.*field.member;
+            value = number<T>(o, std::string(parameter.key),
+                              parameter.required ? std::nullopt : std::optional<T>(value),
+                              field.low, field.high);
+          },
+          parameter.field);
+    }
   }
   scene.name = text(o, "name",
                     scene.file.empty() ? std::string(to_string(scene.spec.kind)) + "-" +

@@ -1,0 +1,56 @@
+// What the contactlab subcommands share: their registration interface, the scene options
+// (made from the library's one table of scene parameters) and printing helpers.
+#pragma once
+
+#include <CLI/CLI.hpp>
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "contactlab/kernels/scene.hpp"
+#include "contactlab/kernels/scene_generate.hpp"
+#include "contactlab/tuner/counter_record.hpp"
+#include "contactlab/tuner/result_schema.hpp"
+
+namespace contactlab::cli {
+
+// A registered subcommand: its CLI11 app (true once parsed) and what running it does. main
+// runs it after parsing, so every parse error is reported before any work starts.
+struct Subcommand {
+  CLI::App* app = nullptr;
+  std::function<int()> run;
+};
+
+// One per file, registered by main in this order (the order of `contactlab --help`).
+Subcommand add_scene_command(CLI::App& app);
+Subcommand add_detect_command(CLI::App& app, const std::string& command_line);
+Subcommand add_variants_command(CLI::App& app);
+Subcommand add_sweep_command(CLI::App& app, const std::string& command_line);
+Subcommand add_tune_command(CLI::App& app, const std::string& command_line);
+Subcommand add_demo_command(CLI::App& app);
+
+// Where the particles come from: a file, or a generator spec.
+struct SceneOptions {
+  std::string input_;
+  std::string kind_ = "clustered";
+  double diameter_ = 0.0;  // 0 until given: file scenes may carry their own diameters
+  bool diameter_given_ = false;
+  std::string box_;
+  SceneSpec spec_;  // its numbers are bound to the options of kSceneParameters
+
+  // `with_input`: --input and the kind as --scene (detect, tune); else the kind is --kind.
+  void add_to(CLI::App& app, bool with_input);
+  SceneSpec spec() const;
+  void require_diameter() const;  // throws InputError
+  // The scene and its description for result files.
+  std::pair<Scene, tuner::SceneRecord> load() const;
+};
+
+// "a,b,c" -> {"a", "b", "c"}; throws InputError on an empty item.
+std::vector<std::string> split_list(const std::string& text);
+
+void print_counters(const tuner::CounterRecord& counters);
+
+}  // namespace contactlab::cli

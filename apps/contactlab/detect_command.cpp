@@ -1,0 +1,176 @@
+// `contactlab detect`: detect contacts with one variant, measured (times, counters), printed
+// and optionally written as a result file.
+#include <fmt/core.h>
+
+#include <memory>
+#include <optional>
+
+#include "cli_shared.hpp"
+#include "contactlab/kernels/atomic_file.hpp"
+#include "contactlab/kernels/detector.hpp"
+#include "contactlab/kernels/error.hpp"
+#include "contactlab/tuner/auto_variant.hpp"
+#include "contactlab/tuner/cache_sim.hpp"
+#include "contactlab/tuner/context.hpp"
+#include "contactlab/tuner/measure.hpp"
+#include "contactlab/tuner/papi_counters.hpp"
+
+namespace contactlab::cli {
+namespace {
+
+namespace tn = contactlab::tuner;
+
+struct DetectCommand {
+  SceneOptions scene_;
+  std::string variant_ = "particle/sorted/full/static,200";
+  int threads_ = 0;
+  int repeat_ = 3;
+  int warmup_ = 1;
+  bool adaptive_ = false;
+  double target_ci_ = 0.02;
+  double time_budget_ = 60.0;
+  int max_repeat_ = 200;
+  bool papi_ = false;
+  std::string papi_events_;
+  std::string cache_sim_;
+  std::string cache_file_;  // tuning cache for --variant auto
+  std::string contacts_out_;
+  std::string json_out_;
+  std::string command_line_;
+
+  void add_to(CLI::App& sub);
+  void check() const;
+  int run() const;
+};
+
+void DetectCommand::add_to(CLI::App& sub) {
+  scene_.add_to(sub, true);
+  sub.add_option("--variant", variant_,
+                 "loop/order[/stencil]/schedule[/float], or auto (the tuner's cached choice)");
+  sub.add_option("--cache", cache_file_, "tuning cache file for --variant auto");
+  sub.add_option("--threads", threads_, "OpenMP threads (0 = all)");
+  sub.add_option("--repeat", repeat_, "timed repetitions");
+  sub.add_option("--warmup", warmup_, "untimed runs first");
+  sub.add_flag("--adaptive", adaptive_,
+               "repeat until the median's 95% interval is within --target-ci (--repeat = minimum)");
+  sub.add_option("--target-ci", target_ci_,
+                 "adaptive: target relative half-width of the median's interval (0.02 = 2%)");
+  sub.add_option("--time-budget", time_budget_, "adaptive: seconds before giving up");
+  sub.add_option("--max-repeat", max_repeat_, "adaptive: most timed repetitions");
+  sub.add_flag("--papi", papi_, "count L1/L2 data-cache misses per thread with PAPI");
+  sub.add_option("--papi-events", papi_events_,
+                 "count these PAPI events instead (comma-separated, e.g. perf::TASK-CLOCK)");
+  sub.add_option(
+      "--cache-sim", cache_sim_,
+      "simulate caches under valgrind: host, fx10, or custom:L1SIZE,WAYS,LINE:L2SIZE,WAYS,LINE");
+  sub.add_option("--contacts-out", contacts_out_, "CSV of contacts i,j (i < j)");
+  sub.add_option("--json", json_out_, "result file (docs/result-schema.md)");
+}
+
+// Option values that are wrong whatever the scene: rejected before any work.
+void DetectCommand::check() const {
+  if (repeat_ < 1) throw InputError("--repeat must be >= 1");
+  if (warmup_ < 0) throw InputError("--warmup must be >= 0");
+  if (threads_ < 0) throw InputError("--threads must be >= 0");
+  if (adaptive_) {
+    if (!(target_ci_ > 0.0 && target_ci_ < 1.0)) {
+      throw InputError(
+          fmt::format("--target-ci must be in (0, 1) (a fraction: 0.02 = 2%), got {}", target_ci_));
+    }
+    if (!(time_budget_ > 0.0)) throw InputError("--time-budget must be > 0 seconds");
+    if (max_repeat_ < repeat_) throw InputError("--max-repeat must be >= --repeat");
+  }
+}
+
+void print_summary(const char* name, const tn::Summary& s) {
+  const std::string interval =
+      s.count < 2 ? std::string("no interval from 1 sample")
+                  : fmt::format("[{:.6f}, {:.6f}] covers the median with {:.1f}%", s.interval.low,
+                                s.interval.high, 100.0 * s.interval.coverage);
+  fmt::print("{:<6} median {:.6f} s  {}  min {:.6f}  max {:.6f}\n", name, s.median, interval, s.min,
+             s.max);
+}
+
+void print_run(const tn::RunRecord& run, std::size_t particles) {
+  const tn::RunAggregates& a = *run.aggregates;
+  const tn::RunWork& w = *run.work;
+  fmt::print("variant {}  threads {}  N {}  grid {}x{}x{}  max occupancy {}\n",
+             run.parameters.variant, run.parameters.threads, particles, w.grid[0], w.grid[1],
+             w.grid[2], w.max_cell_occupancy);
+  fmt::print("{} repetitions after {} warm-up ({}), T_ALL = T_s + T_c:\n", a.repetitions,
+             a.warmup_runs, tn::to_string(a.stop_reason));
+  print_summary("T_s", a.setup_s);
+  print_summary("T_c", a.detect_s);
+  print_summary("T_ALL", a.total_s);
+  fmt::print("load imbalance (t_max - t_mean) / t_max: median {:.3f}\n", a.imbalance.median);
+  fmt::print("candidate tests {}  contacts {}\n", w.candidate_tests, w.contact_pairs);
+  for (const auto& c : run.counters) {
+    print_counters(c);
+    if (!c.available)
+      fmt::print(stderr,
+                 "contactlab: warning: no {} counters (reason above and in the result file)\n",
+                 c.source);
+  }
+  if (run.status != tn::RunStatus::kOk)
+    fmt::print(stderr, "contactlab: run {}: {}\n", tn::to_string(run.status), run.message);
+}
+
+int DetectCommand::run() const {
+  check();
+  const bool automatic = variant_ == "auto";
+  const int threads = resolve_threads(threads_);
+  if (automatic && !cache_sim_.empty()) {
+    throw InputError("--cache-sim needs an explicit --variant (not auto)");
+  }
+
+  std::optional<tn::CacheGeometry> geometry;
+  if (!cache_sim_.empty()) geometry = tn::parse_cache_geometry(cache_sim_);
+  if (!contacts_out_.empty()) check_writable(contacts_out_);
+  if (!json_out_.empty()) check_writable(json_out_);
+  std::optional<tn::PapiCounters> papi;
+  if (papi_ || !papi_events_.empty()) {
+    papi.emplace(papi_events_.empty() ? std::vector<std::string>{} : split_list(papi_events_));
+  }
+  auto [scene, scene_record] = scene_.load();
+  const double diameter = scene_.diameter_;
+  const Variant variant = automatic ? tn::auto_variant(scene, scene_record, diameter, threads,
+                                                       cache_file_, command_line_)
+                                    : parse_variant(variant_);
+
+  tn::ResultFile result;
+  result.context = tn::collect_context(command_line_, threads);
+  for (const auto& w : result.context.warnings) fmt::print(stderr, "contactlab: warning: {}\n", w);
+
+  DetectOptions options{variant, diameter, threads, nullptr};
+  tn::MeasureOptions measure;
+  measure.repetition = {warmup_, repeat_, adaptive_, target_ci_, time_budget_, max_repeat_, 0.95};
+  measure.papi = papi ? &*papi : nullptr;
+  ContactDetector detector;
+  tn::RunRecord run = tn::measure_detection(detector, scene, scene_record, options, measure);
+
+  if (geometry) {
+    fmt::print(stderr, "contactlab: simulating the {} caches under valgrind (slow)...\n",
+               geometry->name);
+    run.counters.push_back(
+        tn::simulate_detection_caches(scene, diameter, variant, threads, *geometry));
+  }
+  print_run(run, scene.size());
+
+  if (!contacts_out_.empty()) write_pairs_csv(detector.canonical_contacts(), contacts_out_);
+  const bool ok = run.status == tn::RunStatus::kOk;
+  result.runs.push_back(std::move(run));
+  if (!json_out_.empty()) tn::write_result_file(json_out_, result);
+  return ok ? 0 : 1;
+}
+
+}  // namespace
+
+Subcommand add_detect_command(CLI::App& app, const std::string& command_line) {
+  auto command = std::make_shared<DetectCommand>();
+  command->command_line_ = command_line;
+  CLI::App* sub = app.add_subcommand("detect", "detect contacts with one variant");
+  command->add_to(*sub);
+  return {sub, [command] { return command->run(); }};
+}
+
+}  // namespace contactlab::cli

@@ -1,0 +1,139 @@
+// `contactlab tune`: choose the variant and chunk size for a scene (docs/tuning.md), print the
+// methods side by side, cache the choice and optionally write the report.
+#include <fmt/core.h>
+
+#include <memory>
+
+#include "cli_shared.hpp"
+#include "contactlab/kernels/atomic_file.hpp"
+#include "contactlab/kernels/detector.hpp"
+#include "contactlab/kernels/error.hpp"
+#include "contactlab/tuner/auto_variant.hpp"
+#include "contactlab/tuner/tune.hpp"
+
+namespace contactlab::cli {
+namespace {
+
+namespace tn = contactlab::tuner;
+
+struct TuneCommand {
+  SceneOptions scene_;
+  int threads_ = 0;
+  std::string json_out_;
+  std::string cache_file_;
+  bool predict_only_ = false;
+  bool exhaustive_ = false;
+  bool recalibrate_ = false;
+  std::uint64_t tolerance_ = 0;
+  int max_chunk_ = 65536;
+  std::string orders_ = "sorted,morton";
+  int search_samples_ = tn::TuneOptions{}.search_samples;
+  int exhaustive_rounds_ = tn::TuneOptions{}.exhaustive_rounds;
+  int verify_rounds_ = tn::TuneOptions{}.verify_rounds;
+  std::string command_line_;
+
+  void add_to(CLI::App& sub);
+  tn::TuneOptions options() const;
+  int run() const;
+};
+
+void TuneCommand::add_to(CLI::App& sub) {
+  scene_.add_to(sub, true);
+  sub.add_option("--threads", threads_, "threads to tune for (0 = all cores)");
+  sub.add_option("--json", json_out_, "tuning report (JSON)");
+  sub.add_option("--cache", cache_file_, "tuning cache file");
+  sub.add_flag("--predict-only", predict_only_, "the model alone: no timed run on the scene");
+  sub.add_flag("--exhaustive", exhaustive_, "also sweep every chunk (ground truth)");
+  sub.add_flag("--recalibrate", recalibrate_, "fit the machine's cost model again");
+  sub.add_option("--tolerance", tolerance_, "wrong contact pairs allowed (single precision)");
+  sub.add_option("--max-chunk", max_chunk_, "largest chunk of the grid 1, 2, 4, ...");
+  sub.add_option("--orders", orders_, "orders to screen, comma-separated");
+  sub.add_option("--search-samples", search_samples_, "timed runs per chunk the search evaluates")
+      ->check(CLI::PositiveNumber);
+  sub.add_option("--exhaustive-rounds", exhaustive_rounds_,
+                 "rounds over the chunk grid in the exhaustive sweep (one run per chunk each)")
+      ->check(CLI::PositiveNumber);
+  sub.add_option("--verify-rounds", verify_rounds_,
+                 "rounds of the final verification (every choice timed once per round)")
+      ->check(CLI::PositiveNumber);
+}
+
+tn::TuneOptions TuneCommand::options() const {
+  tn::TuneOptions options;
+  options.threads = resolve_threads(threads_);
+  options.predict_only = predict_only_;
+  options.exhaustive = exhaustive_;
+  options.tolerance = tolerance_;
+  options.search_samples = search_samples_;
+  options.exhaustive_rounds = exhaustive_rounds_;
+  options.verify_rounds = verify_rounds_;
+  if (tolerance_ > 0) options.precisions.push_back(Precision::kFloat);
+  options.chunk_grid = tn::log2_chunk_grid(max_chunk_);
+  options.orders.clear();
+  for (const auto& order : split_list(orders_)) options.orders.push_back(parse_order(order));
+  return options;
+}
+
+// One line per method, then the classic schedules and the predictions for other thread counts.
+void print_report(const nlohmann::json& report) {
+  for (const auto& method : report["methods"]) {
+    std::string measured = "not measured";
+    if (method.contains("measured")) {
+      measured = fmt::format(
+          "measured T_c {:.4f} s [{:.4f}, {:.4f}]  regret {:+.1f}% [{:+.1f}, {:+.1f}]",
+          method["measured"]["median_s"].get<double>(),
+          method["measured"]["ci95_low_s"].get<double>(),
+          method["measured"]["ci95_high_s"].get<double>(), 100.0 * method["regret"].get<double>(),
+          100.0 * method["regret_ci95"][0].get<double>(),
+          100.0 * method["regret_ci95"][1].get<double>());
+    }
+    fmt::print("{:<11} {:<40} cost {:7.2f} s  {}\n", method["method"].get<std::string>(),
+               method["variant"].get<std::string>(), method["tuning_cost_s"].get<double>(),
+               measured);
+  }
+  for (const auto& c : report["classic"]) {
+    fmt::print(
+        "  classic {:<24} k = {:<7} {}\n", c["name"].get<std::string>(), c["chunk"].get<int>(),
+        c.contains("regret") ? fmt::format("regret {:+.1f}%", 100.0 * c["regret"].get<double>())
+                             : "");
+  }
+  for (const auto& p : report["predictions"]) {
+    fmt::print("  {} threads: {} ({})\n", p["threads"].get<int>(), p["variant"].get<std::string>(),
+               p["label"].get<std::string>());
+  }
+}
+
+int TuneCommand::run() const {
+  if (threads_ < 0) throw InputError("--threads must be >= 0");
+  if (max_chunk_ < 1) throw InputError("--max-chunk must be >= 1");
+  if (!json_out_.empty()) check_writable(json_out_);
+  const tn::TuneOptions options = this->options();
+  auto [scene, scene_record] = scene_.load();
+  const double diameter = scene_.diameter_;
+  tn::TuningCache cache(cache_file_.empty() ? tn::TuningCache::default_path() : cache_file_);
+  const tn::Calibration calibration =
+      tn::machine_calibration(cache, options, options.threads, recalibrate_);
+  const tn::TuneReport report =
+      tn::tune(scene, scene_record, diameter, options, calibration, command_line_);
+  print_report(report.json);
+  if (!predict_only_) {
+    cache.store_choice(scene_record, diameter, options.threads, report.chosen, 0.0);
+  }
+  if (!json_out_.empty()) {
+    write_file_atomically(json_out_,
+                          [&](std::ostream& out) { out << report.json.dump(2) << '\n'; });
+  }
+  return 0;
+}
+
+}  // namespace
+
+Subcommand add_tune_command(CLI::App& app, const std::string& command_line) {
+  auto command = std::make_shared<TuneCommand>();
+  command->command_line_ = command_line;
+  CLI::App* sub = app.add_subcommand("tune", "choose the variant and chunk size (docs/tuning.md)");
+  command->add_to(*sub);
+  return {sub, [command] { return command->run(); }};
+}
+
+}  // namespace contactlab::cli

@@ -1,0 +1,45 @@
+// Calibration and `--variant auto` policies on top of tune() and the tuning cache.
+#include "contactlab/tuner/auto_variant.hpp"
+
+#include <fmt/core.h>
+
+namespace contactlab::tuner {
+
+void print_progress(const std::string& line) { fmt::print(stderr, "contactlab: {}\n", line); }
+
+Calibration machine_calibration(TuningCache& cache, const TuneOptions& options, int threads,
+                                bool recalibrate, const ProgressFn& progress) {
+  if (!recalibrate) {
+    if (auto cached = cache.calibration()) return *cached;
+  }
+  if (progress) {
+    progress(fmt::format("calibrating the cost model on this machine (once; cached in {})...",
+                         cache.path()));
+  }
+  Calibration calibration = calibrate_machine(options, threads);
+  cache.store_calibration(calibration);
+  return calibration;
+}
+
+Variant auto_variant(const Scene& scene, const SceneRecord& record, double diameter, int threads,
+                     const std::string& cache_file, const std::string& command_line,
+                     const ProgressFn& progress) {
+  auto say = [&](const std::string& line) {
+    if (progress) progress(line);
+  };
+  TuningCache cache(cache_file.empty() ? TuningCache::default_path() : cache_file);
+  if (auto cached = cache.choice(record, diameter, threads)) {
+    say(fmt::format("--variant auto: {} (from {})", to_string(*cached), cache.path()));
+    return *cached;
+  }
+  TuneOptions options;
+  options.threads = threads;
+  const Calibration calibration = machine_calibration(cache, options, threads, false, progress);
+  say("--variant auto: no cached choice, tuning...");
+  const TuneReport report = tune(scene, record, diameter, options, calibration, command_line);
+  cache.store_choice(record, diameter, threads, report.chosen, 0.0);
+  say(fmt::format("--variant auto: {} (stored in {})", to_string(report.chosen), cache.path()));
+  return report.chosen;
+}
+
+}  // namespace contactlab::tuner
