@@ -2,8 +2,10 @@
 // rejects unknown, missing and mistyped fields with the JSON path; the documented example is valid.
 #include <gtest/gtest.h>
 
+#include <filesystem>
 #include <fstream>
 #include <functional>
+#include <set>
 #include <sstream>
 
 #include "contactlab/kernels/error.hpp"
@@ -218,6 +220,66 @@ TEST(ResultSchema, DocumentedExampleIsValid) {
   const json example = json::parse(doc.substr(body, end - body));
   const ResultFile parsed = parse_result(example);
   EXPECT_FALSE(parsed.runs.empty());
+}
+
+TEST(ResultSchema, RunsNameTheirPhasesAndWorkCounts) {
+  const ResultFile parsed = parse_result(sample_json());
+  const RunRecord& run = parsed.runs[0];
+  ASSERT_EQ(run.phases.size(), 2u);
+  EXPECT_EQ(json(run.phases.at("setup")), json(run.aggregates->setup_s));
+  EXPECT_EQ(json(run.phases.at("detect")), json(run.aggregates->detect_s));
+  EXPECT_EQ(run.work_counts.at("candidate_tests"), run.work->candidate_tests);
+  EXPECT_EQ(run.work_counts.at("contact_pairs"), run.work->contact_pairs);
+  EXPECT_EQ(run.work_counts.at("max_cell_occupancy"), run.work->max_cell_occupancy);
+  EXPECT_TRUE(parsed.runs[1].phases.empty());
+  EXPECT_EQ(sample_json()["runs"][1]["work_counts"], json::object());
+  json j = sample_json();
+  j["runs"][0]["work_counts"]["contact_pairs"] = -1;
+  EXPECT_EQ(rejection(j),
+            "$.runs[0].work_counts.contact_pairs: expected non-negative integer, got -1");
+  j = sample_json();
+  j["runs"][0]["phases"]["setup"].erase("median");
+  EXPECT_EQ(rejection(j), "$.runs[0].phases.setup: missing field 'median'");
+  j = sample_json();
+  j["runs"][0]["phases"] = json::array();
+  EXPECT_EQ(rejection(j), "$.runs[0].phases: expected object, got array");
+}
+
+// Files written before phases and work_counts existed still read, with both empty.
+TEST(ResultSchema, RunsWithoutPhasesStillRead) {
+  json j = sample_json();
+  for (auto& run : j["runs"]) {
+    run.erase("phases");
+    run.erase("work_counts");
+  }
+  const ResultFile parsed = parse_result(j);
+  EXPECT_TRUE(parsed.runs[0].phases.empty());
+  EXPECT_TRUE(parsed.runs[0].work_counts.empty());
+}
+
+// Every committed result file (an object with "schema_version" and "runs") reads strictly, and
+// writing what was read gives the same JSON again, but for the fields the file predates (added
+// with their empty values).
+TEST(ResultSchema, CommittedResultFilesRead) {
+  namespace fs = std::filesystem;
+  const std::set<std::string> newer{"phases", "work_counts", "executable", "code_isa"};
+  int files = 0;
+  for (const auto& entry :
+       fs::recursive_directory_iterator(fs::path(CONTACTLAB_SOURCE_DIR) / "results")) {
+    if (!entry.is_regular_file() || entry.path().extension() != ".json") continue;
+    std::ifstream in(entry.path());
+    const json j = json::parse(in);
+    if (!j.is_object() || !j.contains("schema_version") || !j.contains("runs")) continue;
+    ResultFile parsed;
+    ASSERT_NO_THROW(parsed = read_result_file(entry.path().string())) << entry.path();
+    for (const json& change : json::diff(j, json(parsed))) {
+      const std::string path = change["path"];
+      EXPECT_TRUE(change["op"] == "add" && newer.count(path.substr(path.rfind('/') + 1)))
+          << entry.path() << ": " << change.dump();
+    }
+    ++files;
+  }
+  EXPECT_GT(files, 0) << "no result files under results/";
 }
 
 }  // namespace

@@ -64,6 +64,11 @@ RunRecord measure_detection(ContactDetector& detector, const Scene& scene,
   record.parameters.threads = last.threads;
   record.work =
       RunWork{last.candidate_tests, last.contact_pairs, last.max_cell_occupancy, last.grid_dims};
+  // The same values by name, as every kernel family reports them (result_schema.hpp).
+  record.phases = {{"setup", a.setup_s}, {"detect", a.detect_s}};
+  record.work_counts = {{"candidate_tests", last.candidate_tests},
+                        {"contact_pairs", last.contact_pairs},
+                        {"max_cell_occupancy", last.max_cell_occupancy}};
 
   const auto [lo, hi] = std::minmax_element(contact_counts.begin(), contact_counts.end());
   if (*lo != *hi) {

@@ -5,6 +5,7 @@
 #include <array>
 #include <cstdint>
 #include <limits>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <set>
@@ -132,6 +133,19 @@ void read(const JsonIn& in, std::array<T, N>& out) {
   }
   for (std::size_t i = 0; i < N; ++i) {
     read(JsonIn(in.value()[i], in.path() + "[" + std::to_string(i) + "]"), out[i]);
+  }
+}
+
+// Any value, kept as it is (a part read later, or by another reader).
+inline void read(const JsonIn& in, nlohmann::json& out) { out = in.value(); }
+
+// An object used as a map: any keys, each value of type T.
+template <class T>
+void read(const JsonIn& in, std::map<std::string, T>& out) {
+  if (!in.value().is_object()) in.wrong_type("object");
+  out.clear();
+  for (const auto& item : in.value().items()) {
+    read(JsonIn(item.value(), in.path() + "." + item.key()), out[item.key()]);
   }
 }
 

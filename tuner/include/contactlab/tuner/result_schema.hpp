@@ -1,12 +1,13 @@
 // The result file every measuring command writes and every reader checks (docs/result-schema.md):
 //   { "schema_version": 1, "context": {...}, "runs": [ {status, parameters, samples,
-//     aggregates, work, counters[]}, ... ] }
+//     aggregates, work, phases, work_counts, counters[]}, ... ] }
 // Writers go through write_result_file (atomic); readers through parse_result /
 // read_result_file, which reject unknown or missing fields with the JSON path.
 #pragma once
 
 #include <array>
 #include <cstdint>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
@@ -94,6 +95,13 @@ struct RunRecord {
   std::optional<RunWork> work;                // null when failed
   std::vector<CounterRecord> counters;        // each with its source; empty when none requested
   std::optional<ContactCheck> contact_check;  // null when not checked
+  // The kernel's own phases and work, by name, so that another kernel family reports its
+  // phases and counts without a schema change: for contact detection "setup" and "detect"
+  // (the same summaries as aggregates.setup_s and detect_s) and "candidate_tests",
+  // "contact_pairs", "max_cell_occupancy" (as in work). Empty when failed; absent from files
+  // written before they existed (read as empty).
+  std::map<std::string, Summary> phases;
+  std::map<std::string, std::uint64_t> work_counts;
 };
 
 struct ResultFile {
