@@ -5,6 +5,7 @@
 //  - search: screens the loop/order/stencil variants at the model's schedule, then a
 //    noise-aware search over the chunk size seeded by the model;
 //  - exhaustive: every chunk of the grid (ground truth for the regret of the other two).
+// They are plug-ins (tuning_method.hpp) over "a kernel" (measured_kernel.hpp).
 #pragma once
 
 #include <map>
@@ -23,7 +24,7 @@ namespace contactlab::tuner {
 inline constexpr int kTuneSchemaVersion = 1;
 
 struct TuneOptions {
-  int threads = 0;  // 0 = every core
+  int threads = 0;  // 0 = resolve_threads(0), OpenMP's default
   std::vector<int> chunk_grid = log2_chunk_grid(65536);
   std::vector<LoopKind> loops{LoopKind::kParticle, LoopKind::kCell};
   // Unsorted is left out by default: reordering is faster on every scene measured (paper
@@ -75,7 +76,17 @@ struct TuneReport {
                         // predict_only)
 };
 
-// Throws InputError for bad options. `scene_record` describes the scene for the report.
+class MeasuredKernel;
+
+// Tunes any kernel with the registered methods (tuning_method.hpp); `scene_description` holds
+// the report's description of what the kernel runs on (e.g. "scene" and "diameter").
+// Throws InputError for bad options.
+TuneReport tune_kernel(MeasuredKernel& kernel, const nlohmann::json& scene_description,
+                       const TuneOptions& options, const Calibration& calibration,
+                       const std::string& command_line);
+
+// Contact detection of `scene`. Throws InputError for bad options. `scene_record` describes the
+// scene for the report.
 TuneReport tune(const Scene& scene, const SceneRecord& scene_record, double diameter,
                 const TuneOptions& options, const Calibration& calibration,
                 const std::string& command_line);

@@ -1,0 +1,61 @@
+// "A kernel" as the tuner sees it: something that runs one variant of itself on its scene and
+// reports named phase times and work counts, tells the schedule model the exact work of each
+// parallel iteration, and says how many of its results a variant got wrong. Contact detection
+// is one (DetectionKernel); DEM's force loop will be another, tuned by the same methods.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <string_view>
+#include <utility>
+#include <vector>
+
+#include "contactlab/kernels/contact_list.hpp"
+#include "contactlab/kernels/detector.hpp"
+#include "contactlab/kernels/scene.hpp"
+#include "contactlab/kernels/variant.hpp"
+
+namespace contactlab::tuner {
+
+struct KernelRun {
+  std::vector<std::pair<std::string, double>> phases_s;       // in run order
+  std::vector<std::pair<std::string, std::uint64_t>> counts;  // work done
+  double phase_s(std::string_view name) const;                // 0 when absent
+};
+
+class MeasuredKernel {
+ public:
+  virtual ~MeasuredKernel() = default;
+  virtual std::string_view name() const = 0;
+  // The phase the tuner minimises: the one the variant's schedule parallelises.
+  virtual std::string_view tuned_phase() const = 0;
+  virtual KernelRun run(const Variant& variant, int threads) = 0;
+  // The exact work of each iteration of the variant's parallel loop (no timing).
+  virtual LoopWork iteration_work(const Variant& variant, int threads) = 0;
+  // Results of the last run that differ from the exact reference: {missing, extra}.
+  virtual std::pair<std::uint64_t, std::uint64_t> wrong_results() = 0;
+
+  // `count` timed runs of the tuned phase (after whatever warm-up the caller did).
+  std::vector<double> samples(const Variant& variant, int threads, int count);
+};
+
+// Contact detection of one scene: phases "setup" (T_s) and "detect" (T_c, tuned); counts
+// "candidate_tests" and "contact_pairs"; the reference is the exact particle/sorted/half run.
+class DetectionKernel final : public MeasuredKernel {
+ public:
+  DetectionKernel(const Scene& scene, double diameter) : scene_(scene), diameter_(diameter) {}
+  std::string_view name() const override { return "contact_detection"; }
+  std::string_view tuned_phase() const override { return "detect"; }
+  KernelRun run(const Variant& variant, int threads) override;
+  LoopWork iteration_work(const Variant& variant, int threads) override;
+  std::pair<std::uint64_t, std::uint64_t> wrong_results() override;
+
+ private:
+  const Scene& scene_;
+  double diameter_;
+  ContactDetector detector_;
+  ContactList reference_;
+  bool have_reference_ = false;
+};
+
+}  // namespace contactlab::tuner

@@ -1,0 +1,53 @@
+// The exhaustive sweep (ground truth, with --exhaustive): every chunk of the grid for the
+// search's structure and schedule kind, one timed run per chunk per round, each round in a new
+// seeded order; its fastest chunk is the exhaustive best.
+#include <omp.h>
+
+#include "methods.hpp"
+
+namespace contactlab::tuner {
+namespace {
+
+class ExhaustiveMethod final : public TuningMethod {
+ public:
+  std::string_view name() const override { return "exhaustive"; }
+  bool times_runs() const override { return true; }
+  bool enabled(const TuneOptions& options) const override { return options.exhaustive; }
+
+  nlohmann::json choose(TuningState& state) override {
+    const double start = omp_get_wtime();
+    const PricedStructure& tuned = state.tuned ? *state.tuned : *state.model_best;
+    const ScheduleKind kind = state.tuned_kind;
+    auto measure = [&](int chunk) {
+      return state.kernel.samples(with_schedule(tuned.variant, kind, chunk), state.threads, 1);
+    };
+    ChunkSearchOptions options = state.search_options;
+    options.rounds = state.options.exhaustive_rounds;
+    const ChunkSearchResult all = exhaustive_chunk_sweep(measure, options);
+    nlohmann::json points = nlohmann::json::array();
+    for (const ChunkMeasurement& m : all.measured) {
+      points.push_back({{"chunk", m.chunk},
+                        {"median_s", m.median_seconds},
+                        {"ci95_low_s", m.interval.low},
+                        {"ci95_high_s", m.interval.high}});
+    }
+    const Variant chosen = with_schedule(tuned.variant, kind, all.fastest_chunk);
+    state.choices.emplace_back("exhaustive", chosen);
+    return {{"method", "exhaustive"},
+            {"variant", to_string(chosen)},
+            {"chunk", all.fastest_chunk},
+            {"largest_equivalent_chunk", all.chosen_chunk},
+            {"rounds", state.options.exhaustive_rounds},
+            {"timed_runs", all.evaluations},
+            {"tuning_cost_s", omp_get_wtime() - start},
+            {"chunks_measured", points}};
+  }
+};
+
+}  // namespace
+
+std::unique_ptr<TuningMethod> make_exhaustive_method() {
+  return std::make_unique<ExhaustiveMethod>();
+}
+
+}  // namespace contactlab::tuner

@@ -1,0 +1,90 @@
+// The model: zero timed runs on the scene. The exact per-iteration work of every structure and
+// the machine's calibrated costs price every schedule kind and chunk of the grid (libgomp's
+// schedules simulated, schedule_model.hpp); its cost is the work profiles.
+#include <omp.h>
+
+#include <limits>
+
+#include "contactlab/kernels/error.hpp"
+#include "methods.hpp"
+
+namespace contactlab::tuner {
+namespace {
+
+WorkView view_of(const LoopWork& work) { return {work.tests, work.homes, work.builds}; }
+
+// The model's best schedule for one structure: every kind, every chunk of the grid.
+std::pair<Variant, double> best_schedule(const Variant& structure, WorkView work, int threads,
+                                         const MachineCosts& costs, const std::vector<int>& grid) {
+  std::pair<Variant, double> best{structure, std::numeric_limits<double>::infinity()};
+  const PreparedWork prepared(work);
+  for (const auto kind : {ScheduleKind::kStatic, ScheduleKind::kDynamic, ScheduleKind::kGuided}) {
+    std::vector<int> candidates = grid;
+    if (kind == ScheduleKind::kStatic) candidates.insert(candidates.begin(), 0);  // block
+    const ChunkPrediction p = predict_best_chunk(prepared, threads, kind, costs, candidates);
+    if (p.best_seconds < best.second) {
+      best = {with_schedule(structure, kind, p.best_chunk), p.best_seconds};
+    }
+  }
+  return best;
+}
+
+class ModelMethod final : public TuningMethod {
+ public:
+  std::string_view name() const override { return "model"; }
+  bool times_runs() const override { return false; }
+
+  nlohmann::json choose(TuningState& state) override {
+    const double start = omp_get_wtime();
+    const TuneOptions& options = state.options;
+    nlohmann::json table = nlohmann::json::array();
+    for (const Variant& structure : structures_of(options)) {
+      const auto found = state.calibration.structures.find(structure_key(structure));
+      PricedStructure s{
+          structure, state.kernel.iteration_work(structure, state.threads),
+          found != state.calibration.structures.end() ? found->second.costs : MachineCosts{},
+          structure, 0.0};
+      std::tie(s.model_choice, s.predicted_s) =
+          best_schedule(structure, view_of(s.work), state.threads, s.costs, options.chunk_grid);
+      table.push_back({{"variant", to_string(s.model_choice)}, {"predicted_s", s.predicted_s}});
+      state.structures.push_back(std::move(s));
+    }
+    // Without a tolerance the model cannot vouch for single precision: it never runs.
+    for (const PricedStructure& s : state.structures) {
+      if (s.variant.precision != Precision::kDouble && options.tolerance == 0) continue;
+      if (!state.model_best || s.predicted_s < state.model_best->predicted_s) state.model_best = &s;
+    }
+    if (!state.model_best) throw InputError("tune: no structure left to choose from");
+    state.model_cost_s = omp_get_wtime() - start;
+
+    // Other thread counts, from the model's structure.
+    const PricedStructure& best = *state.model_best;
+    nlohmann::json predictions = nlohmann::json::array();
+    for (const int p : options.predict_threads) {
+      const auto [variant, seconds] =
+          best_schedule(best.variant, view_of(best.work), p, best.costs, options.chunk_grid);
+      predictions.push_back(
+          {{"threads", p},
+           {"variant", to_string(variant)},
+           {"predicted_s", seconds},
+           {"label", p > omp_get_num_procs()
+                         ? "predicted (model only: more threads than this machine has)"
+                         : "predicted (model only)"}});
+    }
+    state.report["predictions"] = predictions;
+    state.choices.emplace_back("model", best.model_choice);
+    return {{"method", "model"},
+            {"variant", to_string(best.model_choice)},
+            {"chunk", best.model_choice.schedule.chunk},
+            {"predicted_s", best.predicted_s},
+            {"timed_runs", 0},
+            {"tuning_cost_s", state.model_cost_s},
+            {"structures", table}};
+  }
+};
+
+}  // namespace
+
+std::unique_ptr<TuningMethod> make_model_method() { return std::make_unique<ModelMethod>(); }
+
+}  // namespace contactlab::tuner

@@ -1,0 +1,98 @@
+// The search: screens every structure the model priced at its modelled schedule (single
+// precision checked against the exact results and dropped when wrong beyond the tolerance),
+// then a noise-aware search over the chunk size of the fastest, seeded by the model
+// (chunk_search.hpp). It stands on the model, so its cost includes the model's.
+#include <omp.h>
+
+#include <algorithm>
+#include <limits>
+
+#include "contactlab/kernels/error.hpp"
+#include "contactlab/tuner/statistics.hpp"
+#include "methods.hpp"
+
+namespace contactlab::tuner {
+namespace {
+
+class SearchMethod final : public TuningMethod {
+ public:
+  std::string_view name() const override { return "search"; }
+  bool times_runs() const override { return true; }
+
+  nlohmann::json choose(TuningState& state) override {
+    const TuneOptions& options = state.options;
+    MeasuredKernel& kernel = state.kernel;
+    const int threads = state.threads;
+    const double start = omp_get_wtime();
+    nlohmann::json screening = nlohmann::json::array();
+    double best_s = std::numeric_limits<double>::infinity();
+    for (const PricedStructure& s : state.structures) {
+      kernel.run(s.model_choice, threads);  // warm-up
+      const std::vector<double> samples =
+          kernel.samples(s.model_choice, threads, options.search_samples);
+      const auto [missing, extra] = kernel.wrong_results();
+      const bool acceptable = missing + extra <= options.tolerance;
+      const double m = median(samples);
+      screening.push_back({{"variant", to_string(s.model_choice)},
+                           {"median_s", m},
+                           {"wrong_contacts", {{"missing", missing}, {"extra", extra}}},
+                           {"acceptable", acceptable}});
+      if (acceptable && m < best_s) {
+        best_s = m;
+        state.tuned = &s;
+      }
+    }
+    if (!state.tuned)
+      throw InputError("tune: every structure had wrong contacts beyond the tolerance");
+    const double screening_cost = omp_get_wtime() - start;
+
+    // Noise-aware search over k for the best structure and its modelled schedule kind.
+    const PricedStructure& tuned = *state.tuned;
+    const ScheduleKind kind = tuned.model_choice.schedule.kind;
+    state.tuned_kind = kind;
+    auto measure_chunk = [&](int chunk) {
+      return kernel.samples(with_schedule(tuned.variant, kind, chunk), threads,
+                            options.search_samples);
+    };
+    ChunkSearchOptions& search_options = state.search_options;
+    search_options.grid = options.chunk_grid;
+    const int model_chunk = tuned.model_choice.schedule.chunk;
+    search_options.seed_chunk = model_chunk > 0 ? model_chunk : options.chunk_grid.back();
+    // Budget: a fifth of what the exhaustive sweep would spend, in measured runs. What the
+    // bracket and golden section leave of it goes to confirming the chunks still equivalent
+    // to the fastest (more samples, narrower intervals).
+    search_options.confirmation_rounds = 2;
+    search_options.budget.max_evaluations =
+        std::max(3, static_cast<int>(options.chunk_grid.size()) * options.exhaustive_rounds / 5 /
+                        options.search_samples);
+    const ChunkSearchResult searched = search_chunk(measure_chunk, search_options);
+    const Variant chosen = with_schedule(tuned.variant, kind, searched.chosen_chunk);
+    const double cost = omp_get_wtime() - start + state.model_cost_s;
+    state.choices.emplace_back("search", chosen);
+
+    nlohmann::json points = nlohmann::json::array();
+    for (const ChunkMeasurement& m : searched.measured) {
+      points.push_back({{"chunk", m.chunk}, {"median_s", m.median_seconds}});
+    }
+    const int structures = static_cast<int>(state.structures.size());
+    return {{"method", "search"},
+            {"variant", to_string(chosen)},
+            {"chunk", searched.chosen_chunk},
+            {"timed_runs", searched.evaluations * options.search_samples +
+                               structures * (1 + options.search_samples)},
+            {"chunk_search_timed_runs", searched.evaluations * options.search_samples},
+            {"evaluations", searched.evaluations},
+            {"screening_cost_s", screening_cost},
+            {"model_cost_s", state.model_cost_s},
+            {"chunk_search_cost_s", cost - screening_cost - state.model_cost_s},
+            {"tuning_cost_s", cost},
+            {"screening", screening},
+            {"chunks_measured", points}};
+  }
+};
+
+}  // namespace
+
+std::unique_ptr<TuningMethod> make_search_method() { return std::make_unique<SearchMethod>(); }
+
+}  // namespace contactlab::tuner
