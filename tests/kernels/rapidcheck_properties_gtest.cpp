@@ -9,7 +9,7 @@
 
 #include <sstream>
 
-#include "../common/rapidcheck_seeded.hpp"
+#include "rapidcheck_seeded.hpp"
 #include "test_support.hpp"
 
 namespace contactlab::test {

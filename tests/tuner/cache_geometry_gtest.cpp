@@ -6,7 +6,7 @@
 #include "contactlab/kernels/error.hpp"
 #include "contactlab/tuner/cache_sim.hpp"
 #include "contactlab/tuner/context.hpp"
-#include "tuner_test_support.hpp"
+#include "program_test_support.hpp"
 
 namespace contactlab::tuner {
 namespace {

@@ -5,7 +5,7 @@
 #include <cstdlib>
 
 #include "contactlab/tuner/cache_sim.hpp"
-#include "tuner_test_support.hpp"
+#include "program_test_support.hpp"
 
 namespace contactlab::tuner {
 namespace {

@@ -9,7 +9,7 @@
 #include "contactlab/kernels/error.hpp"
 #include "contactlab/tuner/measure.hpp"
 #include "contactlab/tuner/papi_counters.hpp"
-#include "tuner_test_support.hpp"
+#include "program_test_support.hpp"
 
 namespace contactlab::tuner {
 namespace {

@@ -11,7 +11,7 @@
 #include "contactlab/kernels/error.hpp"
 #include "contactlab/tuner/measure.hpp"
 #include "contactlab/tuner/result_schema.hpp"
-#include "tuner_test_support.hpp"
+#include "program_test_support.hpp"
 
 namespace contactlab::tuner {
 namespace {

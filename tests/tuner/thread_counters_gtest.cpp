@@ -11,7 +11,7 @@
 #include "contactlab/tuner/measure.hpp"
 #include "contactlab/tuner/thread_counters.hpp"
 #include "fake_counter_backend.hpp"
-#include "tuner_test_support.hpp"
+#include "program_test_support.hpp"
 
 namespace contactlab::tuner {
 namespace {

@@ -7,7 +7,7 @@
 
 #include "contactlab/kernels/error.hpp"
 #include "contactlab/tuner/tune.hpp"
-#include "tuner_test_support.hpp"
+#include "program_test_support.hpp"
 
 namespace contactlab::tuner {
 namespace {

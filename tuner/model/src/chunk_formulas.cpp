@@ -1,4 +1,4 @@
-#include "contactlab/tuner/chunk_formulas.hpp"
+#include "contactlab/tuner_model/chunk_formulas.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -1,4 +1,4 @@
-#include "contactlab/tuner/chunk_search.hpp"
+#include "contactlab/tuner_model/chunk_search.hpp"
 
 #include <algorithm>
 #include <chrono>

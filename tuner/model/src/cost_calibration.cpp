@@ -1,4 +1,4 @@
-#include "contactlab/tuner/cost_calibration.hpp"
+#include "contactlab/tuner_model/cost_calibration.hpp"
 
 #include <algorithm>
 #include <array>

@@ -1,4 +1,4 @@
-#include "contactlab/tuner/schedule_model.hpp"
+#include "contactlab/tuner_model/schedule_model.hpp"
 
 #include <algorithm>
 #include <limits>

@@ -1,4 +1,4 @@
-#include "contactlab/tuner/statistics.hpp"
+#include "contactlab/tuner_model/statistics.hpp"
 
 #include <algorithm>
 #include <chrono>

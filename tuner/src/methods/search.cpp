@@ -8,7 +8,7 @@
 #include <limits>
 
 #include "contactlab/kernels/error.hpp"
-#include "contactlab/tuner/statistics.hpp"
+#include "contactlab/tuner_model/statistics.hpp"
 #include "methods.hpp"
 
 namespace contactlab::tuner {

@@ -19,7 +19,7 @@
 #include "contactlab/tuner/context.hpp"
 #include "contactlab/tuner/counter_record.hpp"
 #include "contactlab/tuner/json_reader.hpp"
-#include "contactlab/tuner/statistics.hpp"
+#include "contactlab/tuner_model/statistics.hpp"
 
 namespace contactlab::tuner {
 

@@ -17,7 +17,7 @@
 #include "contactlab/kernels/scene.hpp"
 #include "contactlab/kernels/variant.hpp"
 #include "contactlab/tuner/result_schema.hpp"
-#include "contactlab/tuner/schedule_model.hpp"
+#include "contactlab/tuner_model/schedule_model.hpp"
 
 namespace contactlab::tuner {
 

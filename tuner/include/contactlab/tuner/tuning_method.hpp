@@ -16,10 +16,10 @@
 #include <vector>
 
 #include "contactlab/kernels/variant.hpp"
-#include "contactlab/tuner/chunk_search.hpp"
 #include "contactlab/tuner/measured_kernel.hpp"
-#include "contactlab/tuner/schedule_model.hpp"
 #include "contactlab/tuner/tune.hpp"
+#include "contactlab/tuner_model/chunk_search.hpp"
+#include "contactlab/tuner_model/schedule_model.hpp"
 
 namespace contactlab::tuner {
 

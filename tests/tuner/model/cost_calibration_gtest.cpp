@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "contactlab/kernels/rng.hpp"
-#include "contactlab/tuner/cost_calibration.hpp"
+#include "contactlab/tuner_model/cost_calibration.hpp"
 
 namespace contactlab::tuner {
 namespace {

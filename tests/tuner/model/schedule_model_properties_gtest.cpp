@@ -9,9 +9,9 @@
 #include <numeric>
 #include <vector>
 
-#include "../common/rapidcheck_seeded.hpp"
-#include "contactlab/tuner/chunk_search.hpp"
-#include "contactlab/tuner/schedule_model.hpp"
+#include "contactlab/tuner_model/chunk_search.hpp"
+#include "contactlab/tuner_model/schedule_model.hpp"
+#include "rapidcheck_seeded.hpp"
 
 namespace contactlab::tuner {
 using test::check_with_seed;

@@ -13,7 +13,7 @@
 #include <vector>
 
 #include "contactlab/kernels/rng.hpp"
-#include "contactlab/tuner/chunk_search.hpp"
+#include "contactlab/tuner_model/chunk_search.hpp"
 
 namespace contactlab::tuner {
 namespace {

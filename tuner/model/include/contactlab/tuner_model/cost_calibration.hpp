@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "contactlab/kernels/variant.hpp"
-#include "contactlab/tuner/schedule_model.hpp"
+#include "contactlab/tuner_model/schedule_model.hpp"
 
 namespace contactlab::tuner {
 

@@ -1,4 +1,5 @@
-// Helpers of the tuner tests: running the contactlab program, temporary folders, a small scene.
+// Helpers of the tuner and program tests: running the contactlab program, temporary folders,
+// a small scene.
 #pragma once
 
 #include <gtest/gtest.h>

@@ -6,7 +6,7 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 
-#include "tuner_test_support.hpp"
+#include "program_test_support.hpp"
 
 namespace contactlab::test {
 namespace {

@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "contactlab/kernels/error.hpp"
-#include "contactlab/tuner/statistics.hpp"
+#include "contactlab/tuner_model/statistics.hpp"
 
 namespace contactlab::tuner {
 namespace {

@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "contactlab/tuner/chunk_formulas.hpp"
+#include "contactlab/tuner_model/chunk_formulas.hpp"
 
 namespace contactlab::tuner {
 namespace {

@@ -7,7 +7,7 @@
 #include "contactlab/kernels/scene_options.hpp"
 #include "contactlab/tuner/papi_counters.hpp"
 #include "contactlab/tuner/result_schema.hpp"
-#include "tuner_test_support.hpp"
+#include "program_test_support.hpp"
 
 namespace contactlab::tuner {
 namespace {

@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "contactlab/tuner/schedule_model.hpp"
+#include "contactlab/tuner_model/schedule_model.hpp"
 
 namespace contactlab::tuner {
 

@@ -8,7 +8,7 @@
 #include <set>
 
 #include "contactlab/tuner/result_schema.hpp"
-#include "tuner_test_support.hpp"
+#include "program_test_support.hpp"
 
 namespace contactlab::test {
 namespace {
