@@ -1,6 +1,6 @@
-// Contact detection: one traversal skeleton shared by every variant. The variant picks the
-// layout (sorted coordinates or indirection through cell lists), the outer loop (cells or
-// particles), the stencil (27 cells or own cell + 13 forward) and the OpenMP schedule.
+// Contact detection, per-iteration work and neighbour lists: each is the traversal of
+// traverse.hpp with its own pair op (ContactOp with the contact or the neighbour test, or
+// WorkCountOp), and the CSR rows are assembled after the traversal.
 #include "contactlab/kernels/detector.hpp"
 
 #include <omp.h>
@@ -11,161 +11,127 @@
 
 #include "contactlab/kernels/error.hpp"
 #include "contactlab/kernels/pair_test.hpp"
+#include "contactlab/kernels/traverse.hpp"
 
 namespace contactlab {
 
 int resolve_threads(int requested) { return requested > 0 ? requested : omp_get_max_threads(); }
 namespace {
 
-// The stencil as rows of cells along x: for each (dy, dz) the cells dx in [dx_lo, dx_hi].
-// With the linear numbering a row's cells are consecutive keys, so its particles are one slot
-// range found with two loads. Rows are in ascending key order (z, then y).
-struct StencilRow {
-  int dy, dz, dx_lo, dx_hi;
-};
+using traversal::Home;
 
-struct StencilRows {
-  std::array<StencilRow, 9> rows{};
-  int count = 0;
-  int own = 0;  // the row holding the home cell
-};
+// The contact test of pair_test.hpp, for one home at a time.
+template <class Real, bool kDiameters>
+struct ContactTest {
+  const Real* d;
+  Real reach_sq;  // D^2, without per-particle diameters
 
-StencilRows make_stencil(Stencil stencil) {
-  StencilRows result;
-  for (int dz = -1; dz <= 1; ++dz) {
-    for (int dy = -1; dy <= 1; ++dy) {
-      // Forward half: own cell and the cells (dz, dy, dx) lexicographically after (0, 0, 0),
-      // so each unordered pair of distinct neighbour cells is visited from one of them only.
-      const bool before_own = dz < 0 || (dz == 0 && dy < 0);
-      if (stencil == Stencil::kHalf && before_own) continue;
-      const bool own = dz == 0 && dy == 0;
-      if (own) result.own = result.count;
-      const int dx_lo = stencil == Stencil::kHalf && own ? 0 : -1;
-      result.rows[result.count++] = {dy, dz, dx_lo, 1};
-    }
-  }
-  return result;
-}
-
-struct SlotRange {
-  std::uint32_t begin, end;
-};
-
-// The particles of a home cell's stencil as slot ranges, ranges[own] holding the home cell.
-// With the half stencil ranges[own] starts at the home cell (no stencil cell precedes it).
-struct NeighbourRanges {
-  std::array<SlotRange, 27> ranges{};
-  int count = 0;
-  int own = 0;
-  std::uint64_t candidates = 0;  // slots in all ranges, the home particle's own included
-
-  // Pair tests of the home particle in slot s_h: with the half stencil only the own range's
-  // later slots, with the full one every slot but its own.
-  std::uint64_t tests_from(std::uint32_t s_h, bool half) const {
-    return candidates - (half ? s_h + 1 - ranges[own].begin : 1);
-  }
-
-  void build(const CellGrid& grid, const CellRegistry& registry, const StencilRows& stencil,
-             const std::array<int, 3>& home) {
-    count = 0;
-    candidates = 0;
-    const auto& dims = grid.dims();
-    const std::uint32_t* begin_of = registry.cell_begin.data();
-    const bool linear = grid.numbering() == CellNumbering::kLinear;
-    for (int r = 0; r < stencil.count; ++r) {
-      const StencilRow& row = stencil.rows[r];
-      const int cy = home[1] + row.dy, cz = home[2] + row.dz;
-      if (cy < 0 || cz < 0 || cy >= dims[1] || cz >= dims[2]) continue;
-      const int x_lo = std::max(home[0] + row.dx_lo, 0);
-      const int x_hi = std::min(home[0] + row.dx_hi, dims[0] - 1);
-      if (linear) {
-        if (r == stencil.own) own = count;
-        const SlotRange range{begin_of[grid.key(x_lo, cy, cz)],
-                              begin_of[grid.key(x_hi, cy, cz) + 1]};
-        if (range.begin == range.end) continue;  // never the own row: it holds the home
-        ranges[count++] = range;
-        candidates += range.end - range.begin;
-        continue;
-      }
-      // Morton keys of a row are not consecutive: one range per cell.
-      for (int cx = x_lo; cx <= x_hi; ++cx) {
-        const std::uint32_t key = grid.key(cx, cy, cz);
-        const SlotRange range{begin_of[key], begin_of[key + 1]};
-        if (range.begin == range.end) continue;  // never the home cell
-        if (r == stencil.own && cx == home[0]) own = count;
-        ranges[count++] = range;
-        candidates += range.end - range.begin;
-      }
-    }
-  }
-};
-
-// Where the kernel reads particles. `cell_x/y/z` are the double coordinates the particles
-// were registered with (a home particle's cell must be found exactly as registration did);
-// `x/y/z/d` are the coordinates the pair test reads, in the variant's precision T.
-template <class T>
-struct Coordinates {
-  const double *cell_x, *cell_y, *cell_z;
-  const T *x, *y, *z, *d;
-};
-
-// Coordinates stored in slot order: working id == slot, no indirection.
-template <class T>
-struct SortedLayout : Coordinates<T> {
-  using Real = T;
-  std::uint32_t particle_at(std::uint32_t slot) const { return slot; }
-  std::uint32_t slot_of(std::uint32_t particle) const { return particle; }
-};
-
-// Coordinates in input order: cell lists map slots to input ids (the paper's unsorted case).
-template <class T>
-struct UnsortedLayout : Coordinates<T> {
-  using Real = T;
-  const std::uint32_t* slot_particle;
-  const std::uint32_t* particle_slot;
-  std::uint32_t particle_at(std::uint32_t slot) const { return slot_particle[slot]; }
-  std::uint32_t slot_of(std::uint32_t particle) const { return particle_slot[particle]; }
-};
-
-// Tests home particle h (in slot s_h) against the candidate ranges, appending partners.
-template <class Layout, bool kHalf, bool kDiameters>
-inline void test_home(const Layout& layout, const NeighbourRanges& nb, std::uint32_t h,
-                      std::uint32_t s_h, typename Layout::Real reach_sq,
-                      detail::PartnerBuffer& out) {
-  using Real = typename Layout::Real;
-  const Real xi = layout.x[h], yi = layout.y[h], zi = layout.z[h];
-  const Real di = kDiameters ? layout.d[h] : Real(0);
-  auto test_range = [&](std::uint32_t begin, std::uint32_t end) {
-    if (begin >= end) return;
-    std::uint32_t* next = out.tail(end - begin);
-    std::size_t found = 0;
-    for (std::uint32_t s = begin; s < end; ++s) {
-      const std::uint32_t j = layout.particle_at(s);
-      const Real dx = xi - layout.x[j], dy = yi - layout.y[j], dz = zi - layout.z[j];
-      bool touching;
+  struct ForHome {
+    Real di;
+    const Real* d;
+    Real reach_sq;
+    bool operator()(std::uint32_t j, Real dx, Real dy, Real dz) const {
       if constexpr (kDiameters) {
-        touching = in_contact(dx, dy, dz, di, layout.d[j]);
+        return in_contact(dx, dy, dz, di, d[j]);
       } else {
-        touching = in_contact(dx, dy, dz, reach_sq);
+        return in_contact(dx, dy, dz, reach_sq);
       }
-      next[found] = j;
-      found += touching;
     }
-    out.advance(found);
   };
-  for (int r = 0; r < nb.count; ++r) {
-    const SlotRange range = nb.ranges[r];
-    if (r != nb.own) {
-      test_range(range.begin, range.end);
-    } else if constexpr (kHalf) {
-      // The range starts at the home cell: only its later slots and the cells after it.
-      test_range(s_h + 1, range.end);
-    } else {
-      test_range(range.begin, s_h);
-      test_range(s_h + 1, range.end);
+  ForHome for_home(std::uint32_t h) const { return {kDiameters ? d[h] : Real(0), d, reach_sq}; }
+};
+
+// The neighbour-list test: the contact test with every diameter (or D) widened by the skin,
+// keeping each pair once (see ContactDetector::neighbor_list).
+template <class Layout, bool kDiameters>
+struct NeighborTest {
+  using Real = typename Layout::Real;
+  const Layout* layout;
+  Real reach_sq;  // (D + skin)^2, without per-particle diameters
+  Real skin;
+  HomeRange homes;
+
+  struct ForHome {
+    Real di;  // d_i + skin
+    const Layout* layout;
+    Real reach_sq, skin;
+    HomeRange homes;
+    std::uint32_t input;  // the home's input row
+    bool operator()(std::uint32_t j, Real dx, Real dy, Real dz) const {
+      const std::uint32_t other = layout->input_of(j);
+      // `&`, not `&&`: no branch in the hot loop.
+      const bool once = other > input || !homes.contains(other);
+      if constexpr (kDiameters) {
+        return once & in_contact(dx, dy, dz, di, layout->d[j] + skin);
+      } else {
+        return once & in_contact(dx, dy, dz, reach_sq);
+      }
     }
+  };
+  ForHome for_home(std::uint32_t h) const {
+    return {kDiameters ? layout->d[h] + skin : Real(0),
+            layout,
+            reach_sq,
+            skin,
+            homes,
+            layout->input_of(h)};
   }
-}
+};
+
+// Appends each home's partners (those passing PairTest) to its thread's buffer, branchless,
+// and records the home and its count for assemble_rows.
+template <class PairTest>
+class ContactOp {
+ public:
+  static constexpr bool kTestsPairs = true;
+
+  ContactOp(const PairTest& test, detail::PartnerBuffer& out, std::vector<std::uint32_t>& homes,
+            std::uint32_t* found_count)
+      : test_(test), out_(out), homes_(homes), found_count_(found_count) {}
+
+  struct Sink {
+    std::uint32_t* next;
+    std::size_t found;
+    typename PairTest::ForHome test;
+    template <class Real>
+    void operator()(std::uint32_t j, Real dx, Real dy, Real dz) {
+      next[found] = j;
+      found += test(j, dx, dy, dz);
+    }
+  };
+  Sink begin_home(const Home& home) {
+    return {out_.tail(home.tests), 0, test_.for_home(home.particle)};
+  }
+  void end_home(const Home& home, const Sink& sink) {
+    out_.advance(sink.found);
+    found_count_[home.particle] = static_cast<std::uint32_t>(sink.found);
+    homes_.push_back(home.particle);
+    tests_ += home.tests;
+  }
+  std::uint64_t tests() const { return tests_; }
+
+ private:
+  PairTest test_;
+  detail::PartnerBuffer& out_;
+  std::vector<std::uint32_t>& homes_;
+  std::uint32_t* found_count_;
+  std::uint64_t tests_ = 0;
+};
+
+// Adds each home's tests, the home itself and its range builds to its loop iteration, without
+// reading a candidate.
+struct WorkCountOp {
+  static constexpr bool kTestsPairs = false;
+  LoopWork& work;
+
+  struct Sink {};
+  Sink begin_home(const Home&) { return {}; }
+  void end_home(const Home& home, Sink) {
+    work.tests[home.iteration] += static_cast<std::uint32_t>(home.tests);
+    work.homes[home.iteration] += 1;
+    if (home.built) work.builds[home.iteration] = 1;
+  }
+};
 
 omp_sched_t to_omp(ScheduleKind kind) {
   switch (kind) {
@@ -179,35 +145,26 @@ omp_sched_t to_omp(ScheduleKind kind) {
   return omp_sched_static;
 }
 
-template <class F>
-void dispatch_bool(bool value, F&& f) {
-  if (value) {
-    f(std::true_type{});
-  } else {
-    f(std::false_type{});
-  }
-}
-
 }  // namespace
 
-template <class Layout>
-void ContactDetector::detect(const CellGrid& grid, const Layout& layout,
+// The contact lists of a prepared grid: the traversal with a ContactOp per thread, then
+// assemble_rows. Timing and observer hooks wrap the traversal only.
+template <class Layout, class PairTest>
+void ContactDetector::detect(const CellGrid& grid, const Layout& layout, const PairTest& test,
                              const DetectOptions& options, DetectRun& run) {
   const Variant& variant = options.variant;
   const std::uint32_t n = static_cast<std::uint32_t>(registry_.slot_particle.size());
   const int threads = run.threads;
   const bool half = variant.stencil == Stencil::kHalf;
-  const bool diameters = layout.d != nullptr;
-  const StencilRows stencil = make_stencil(variant.stencil);
-  using Real = typename Layout::Real;
-  const Real diameter = static_cast<Real>(options.diameter);
-  const Real reach_sq = diameter * diameter;
+  const traversal::Spec spec{grid, registry_, variant.loop, variant.stencil, options.homes};
 
   if (thread_partners_.size() < static_cast<std::size_t>(threads)) {
     thread_partners_.resize(threads);
     thread_homes_.resize(threads);
   }
   found_count_.resize(n);
+  // Ghosts are never homes: their own finds stay 0.
+  if (!spec.homes.covers(n)) std::fill(found_count_.begin(), found_count_.end(), 0u);
   // Half stencil: reverse_count_[t * n + j] counts the finds (h, j) of thread t, later the
   // start of thread t's share of row j's reverse entries. Per-thread counts avoid atomics.
   if (half) reverse_count_.resize(std::size_t{n} * threads);
@@ -222,102 +179,16 @@ void ContactDetector::detect(const CellGrid& grid, const Layout& layout,
 #pragma omp parallel num_threads(threads)
   {
     const int tid = omp_get_thread_num();
-    detail::PartnerBuffer& out = thread_partners_[tid];
-    std::vector<std::uint32_t>& homes = thread_homes_[tid];
-    out.clear();
-    homes.clear();
-    std::uint64_t tests = 0;
-    NeighbourRanges nb;
-
-    auto visit = [&](auto half_tag, auto diameters_tag, std::uint32_t h, std::uint32_t s_h) {
-      const std::size_t before = out.size();
-      test_home<Layout, decltype(half_tag)::value, decltype(diameters_tag)::value>(
-          layout, nb, h, s_h, reach_sq, out);
-      found_count_[h] = static_cast<std::uint32_t>(out.size() - before);
-      homes.push_back(h);
-      tests += nb.tests_from(s_h, decltype(half_tag)::value);
-    };
-
+    thread_partners_[tid].clear();
+    thread_homes_[tid].clear();
+    ContactOp<PairTest> op(test, thread_partners_[tid], thread_homes_[tid], found_count_.data());
     if (options.observer) options.observer->thread_begin(tid);
     const double loop_start = omp_get_wtime();
-    dispatch_bool(half, [&](auto half_tag) {
-      dispatch_bool(diameters, [&](auto diameters_tag) {
-        if (variant.loop == LoopKind::kParticle) {
-          std::uint32_t cached_key = UINT32_MAX;
-#pragma omp for schedule(runtime) nowait
-          for (std::uint32_t h = 0; h < n; ++h) {
-            const auto home = grid.coords_of(layout.cell_x[h], layout.cell_y[h], layout.cell_z[h]);
-            const std::uint32_t key = grid.key(home[0], home[1], home[2]);
-            if (key != cached_key) {
-              nb.build(grid, registry_, stencil, home);
-              cached_key = key;
-            }
-            visit(half_tag, diameters_tag, h, layout.slot_of(h));
-          }
-        } else {
-          const std::uint64_t keys = grid.key_count();
-#pragma omp for schedule(runtime) nowait
-          for (std::uint64_t key = 0; key < keys; ++key) {
-            const std::uint32_t begin = registry_.cell_begin[key];
-            const std::uint32_t end = registry_.cell_begin[key + 1];
-            if (begin == end) continue;
-            const std::uint32_t first = layout.particle_at(begin);
-            nb.build(
-                grid, registry_, stencil,
-                grid.coords_of(layout.cell_x[first], layout.cell_y[first], layout.cell_z[first]));
-            for (std::uint32_t s = begin; s < end; ++s) {
-              visit(half_tag, diameters_tag, layout.particle_at(s), s);
-            }
-          }
-        }
-      });
-    });
+    traversal::traverse(spec, layout, op);
     run.thread_busy_s[tid] = omp_get_wtime() - loop_start;
-    thread_tests[tid] = tests;
+    thread_tests[tid] = op.tests();
     if (options.observer) options.observer->thread_end(tid);
-
-    // Assemble the rows: row h = h's own finds, then (half stencil) every find (g, h) made
-    // from another particle g, grouped by the thread that made it.
-    std::uint32_t* const reverse = half ? reverse_count_.data() + std::size_t{n} * tid : nullptr;
-    if (half) {
-      std::fill(reverse, reverse + n, 0u);
-      for (const std::uint32_t j : std::span(out.data(), out.size())) ++reverse[j];
-    }
-#pragma omp barrier
-#pragma omp single
-    {
-      std::uint64_t total = 0;
-      contacts_.offsets[0] = 0;
-      for (std::uint32_t i = 0; i < n; ++i) {
-        std::uint32_t row = found_count_[i];
-        if (half) {
-          // Exclusive prefix over threads: where each thread's reverse entries of row i start.
-          for (int t = 0; t < threads; ++t) {
-            std::uint32_t& count = reverse_count_[std::size_t{n} * t + i];
-            const std::uint32_t share = count;
-            count = row;
-            row += share;
-          }
-        }
-        total += row;
-        contacts_.offsets[i + 1] = total;
-      }
-      contacts_.partners.resize(total);
-    }
-    std::uint32_t* const partners = contacts_.partners.data();
-    const std::uint32_t* found = out.data();
-    for (const std::uint32_t h : homes) {
-      const std::uint32_t count = found_count_[h];
-      if (count == 0) continue;
-      std::memcpy(partners + contacts_.offsets[h], found, count * sizeof(std::uint32_t));
-      if (half) {
-        for (std::uint32_t k = 0; k < count; ++k) {
-          const std::uint32_t j = found[k];
-          partners[contacts_.offsets[j] + reverse[j]++] = h;
-        }
-      }
-      found += count;
-    }
+    assemble_rows(tid, threads, half);
   }
   run.detect_s = omp_get_wtime() - start;
   if (options.observer) options.observer->region_end();
@@ -326,9 +197,58 @@ void ContactDetector::detect(const CellGrid& grid, const Layout& layout,
   run.contact_pairs = contacts_.pair_count();
 }
 
-// Validates the options, builds the grid and registers (and for sorted orders reorders) the
-// particles: the paper's T_s.
-CellGrid ContactDetector::prepare(const Scene& scene, const DetectOptions& options,
+// Called by every thread of the detection region after its traversal. Row h = h's own finds,
+// then (half stencil) every find (g, h) made from another particle g, grouped by the thread
+// that made it.
+void ContactDetector::assemble_rows(int tid, int threads, bool half) {
+  const std::uint32_t n = static_cast<std::uint32_t>(found_count_.size());
+  const detail::PartnerBuffer& out = thread_partners_[tid];
+  std::uint32_t* const reverse = half ? reverse_count_.data() + std::size_t{n} * tid : nullptr;
+  if (half) {
+    std::fill(reverse, reverse + n, 0u);
+    for (const std::uint32_t j : std::span(out.data(), out.size())) ++reverse[j];
+  }
+#pragma omp barrier
+#pragma omp single
+  {
+    std::uint64_t total = 0;
+    contacts_.offsets[0] = 0;
+    for (std::uint32_t i = 0; i < n; ++i) {
+      std::uint32_t row = found_count_[i];
+      if (half) {
+        // Exclusive prefix over threads: where each thread's reverse entries of row i start.
+        for (int t = 0; t < threads; ++t) {
+          std::uint32_t& count = reverse_count_[std::size_t{n} * t + i];
+          const std::uint32_t share = count;
+          count = row;
+          row += share;
+        }
+      }
+      total += row;
+      contacts_.offsets[i + 1] = total;
+    }
+    contacts_.partners.resize(total);
+  }
+  std::uint32_t* const partners = contacts_.partners.data();
+  const std::uint32_t* found = out.data();
+  for (const std::uint32_t h : thread_homes_[tid]) {
+    const std::uint32_t count = found_count_[h];
+    if (count == 0) continue;
+    std::memcpy(partners + contacts_.offsets[h], found, count * sizeof(std::uint32_t));
+    if (half) {
+      for (std::uint32_t k = 0; k < count; ++k) {
+        const std::uint32_t j = found[k];
+        partners[contacts_.offsets[j] + reverse[j]++] = h;
+      }
+    }
+    found += count;
+  }
+}
+
+// Validates the options, builds the grid (cells at least the largest reach, D or the largest
+// diameter, plus skin wide) and registers (and for sorted orders reorders) the particles: the
+// paper's T_s.
+CellGrid ContactDetector::prepare(const Scene& scene, const DetectOptions& options, double skin,
                                   DetectRun& run) {
   const bool diameters = scene.has_diameters();
   if (!diameters && !(options.diameter > 0.0 && options.diameter < 1e300)) {
@@ -340,10 +260,14 @@ CellGrid ContactDetector::prepare(const Scene& scene, const DetectOptions& optio
     throw InputError("schedule " + to_string(schedule) + ": chunk size must be >= 1");
   }
   if (scene.size() >= UINT32_MAX) throw InputError("at most 2^32 - 2 particles are supported");
+  if (options.homes.first > options.homes.last) {
+    throw InputError("home range: first " + std::to_string(options.homes.first) + " is past last " +
+                     std::to_string(options.homes.last));
+  }
 
   run.threads = resolve_threads(options.threads);
   const Order order = options.variant.order;
-  const CellGrid grid(scene.box, diameters ? scene.max_diameter() : options.diameter,
+  const CellGrid grid(scene.box, (diameters ? scene.max_diameter() : options.diameter) + skin,
                       order == Order::kMorton ? CellNumbering::kMorton : CellNumbering::kLinear);
   run.grid_dims = grid.dims();
 
@@ -355,98 +279,105 @@ CellGrid ContactDetector::prepare(const Scene& scene, const DetectOptions& optio
   return grid;
 }
 
-DetectRun ContactDetector::run(const Scene& scene, const DetectOptions& options) {
-  DetectRun run;
-  const CellGrid grid = prepare(scene, options, run);
+// Calls f(layout) with the prepared particles in the working order and the given precision.
+template <class F>
+void ContactDetector::with_layout(const Scene& scene, Precision precision, DetectRun& run, F&& f) {
   const Scene& source = working_is_sorted_ ? sorted_ : scene;  // coordinates in working order
   const bool diameters = scene.has_diameters();
   auto run_with = [&](const auto& coordinates) {
+    using Real = std::remove_cvref_t<decltype(*coordinates.x)>;
     if (working_is_sorted_) {
-      using Real = std::remove_cvref_t<decltype(*coordinates.x)>;
-      detect(grid, SortedLayout<Real>{coordinates}, options, run);
+      f(traversal::SortedLayout<Real>{coordinates, registry_.slot_particle.data()});
     } else {
-      using Real = std::remove_cvref_t<decltype(*coordinates.x)>;
-      detect(grid,
-             UnsortedLayout<Real>{coordinates, registry_.slot_particle.data(),
-                                  registry_.particle_slot.data()},
-             options, run);
+      f(traversal::UnsortedLayout<Real>{coordinates, registry_.slot_particle.data(),
+                                        registry_.particle_slot.data()});
     }
   };
-  if (options.variant.precision == Precision::kDouble) {
-    run_with(Coordinates<double>{source.x.data(), source.y.data(), source.z.data(), source.x.data(),
-                                 source.y.data(), source.z.data(),
-                                 diameters ? source.diameter.data() : nullptr});
-  } else {
-    // Single precision, relative to the box's lower corner (absolute coordinates far from the
-    // origin would lose most of their float digits). The conversion is part of the setup, as a
-    // code keeping float coordinates would do it once when they change.
-    const double convert_start = omp_get_wtime();
-    const std::size_t n = source.size();
-    const auto& lo = scene.box.lo;
-    narrow_x_.resize(n);
-    narrow_y_.resize(n);
-    narrow_z_.resize(n);
-    narrow_d_.resize(diameters ? n : 0);
-#pragma omp parallel for schedule(static) num_threads(run.threads)
-    for (std::size_t i = 0; i < n; ++i) {
-      narrow_x_[i] = static_cast<float>(source.x[i] - lo[0]);
-      narrow_y_[i] = static_cast<float>(source.y[i] - lo[1]);
-      narrow_z_[i] = static_cast<float>(source.z[i] - lo[2]);
-      if (diameters) narrow_d_[i] = static_cast<float>(source.diameter[i]);
-    }
-    run.setup_s += omp_get_wtime() - convert_start;
-    run_with(Coordinates<float>{source.x.data(), source.y.data(), source.z.data(), narrow_x_.data(),
-                                narrow_y_.data(), narrow_z_.data(),
-                                diameters ? narrow_d_.data() : nullptr});
+  if (precision == Precision::kDouble) {
+    run_with(traversal::Coordinates<double>{source.x.data(), source.y.data(), source.z.data(),
+                                            source.x.data(), source.y.data(), source.z.data(),
+                                            diameters ? source.diameter.data() : nullptr});
+    return;
   }
+  // Single precision, relative to the box's lower corner (absolute coordinates far from the
+  // origin would lose most of their float digits). The conversion is part of the setup, as a
+  // code keeping float coordinates would do it once when they change.
+  const double convert_start = omp_get_wtime();
+  const std::size_t n = source.size();
+  const auto& lo = scene.box.lo;
+  narrow_x_.resize(n);
+  narrow_y_.resize(n);
+  narrow_z_.resize(n);
+  narrow_d_.resize(diameters ? n : 0);
+#pragma omp parallel for schedule(static) num_threads(run.threads)
+  for (std::size_t i = 0; i < n; ++i) {
+    narrow_x_[i] = static_cast<float>(source.x[i] - lo[0]);
+    narrow_y_[i] = static_cast<float>(source.y[i] - lo[1]);
+    narrow_z_[i] = static_cast<float>(source.z[i] - lo[2]);
+    if (diameters) narrow_d_[i] = static_cast<float>(source.diameter[i]);
+  }
+  run.setup_s += omp_get_wtime() - convert_start;
+  run_with(traversal::Coordinates<float>{source.x.data(), source.y.data(), source.z.data(),
+                                         narrow_x_.data(), narrow_y_.data(), narrow_z_.data(),
+                                         diameters ? narrow_d_.data() : nullptr});
+}
+
+DetectRun ContactDetector::run(const Scene& scene, const DetectOptions& options) {
+  DetectRun run;
+  const CellGrid grid = prepare(scene, options, 0.0, run);
+  with_layout(scene, options.variant.precision, run, [&](const auto& layout) {
+    using Real = typename std::remove_cvref_t<decltype(layout)>::Real;
+    if (layout.d) {
+      detect(grid, layout, ContactTest<Real, true>{layout.d, Real(0)}, options, run);
+    } else {
+      const Real diameter = static_cast<Real>(options.diameter);
+      detect(grid, layout, ContactTest<Real, false>{nullptr, diameter * diameter}, options, run);
+    }
+  });
   return run;
 }
 
+ContactList ContactDetector::neighbor_list(const Scene& scene, const DetectOptions& options,
+                                           double skin) {
+  if (!(skin >= 0.0 && skin < 1e300)) {
+    throw InputError("skin must be a finite number >= 0 (got " + std::to_string(skin) + ")");
+  }
+  DetectOptions full = options;
+  full.variant.stencil = Stencil::kFull;
+  DetectRun run;
+  const CellGrid grid = prepare(scene, full, skin, run);
+  with_layout(scene, full.variant.precision, run, [&](const auto& layout) {
+    using Layout = std::remove_cvref_t<decltype(layout)>;
+    using Real = typename Layout::Real;
+    if (layout.d) {
+      detect(grid, layout, NeighborTest<Layout, true>{&layout, 0, Real(skin), full.homes}, full,
+             run);
+    } else {
+      const Real reach = static_cast<Real>(options.diameter + skin);
+      detect(grid, layout, NeighborTest<Layout, false>{&layout, reach * reach, 0, full.homes}, full,
+             run);
+    }
+  });
+  return canonicalize(contacts_, working_to_input());
+}
+
+// The same traversal as run(), with an op that counts instead of testing.
 LoopWork ContactDetector::iteration_work(const Scene& scene, const DetectOptions& options) {
   DetectRun run;
-  const CellGrid grid = prepare(scene, options, run);
+  const CellGrid grid = prepare(scene, options, 0.0, run);
   const Variant& variant = options.variant;
-  const StencilRows stencil = make_stencil(variant.stencil);
-  const bool half = variant.stencil == Stencil::kHalf;
-  // The home particle's cell and slot, whichever the order: registration already knows them.
-  const Scene& coordinates = working_is_sorted_ ? sorted_ : scene;
-  auto slot_of = [&](std::uint32_t h) {
-    return working_is_sorted_ ? h : registry_.particle_slot[h];
-  };
-  NeighbourRanges nb;
-  auto tests_of = [&](std::uint32_t s_h) {
-    return static_cast<std::uint32_t>(nb.tests_from(s_h, half));
-  };
+  const std::size_t iterations =
+      variant.loop == LoopKind::kParticle ? scene.size() : grid.key_count();
   LoopWork work;
-  const std::uint32_t n = static_cast<std::uint32_t>(scene.size());
-  if (variant.loop == LoopKind::kParticle) {
-    work.tests.resize(n);
-    work.homes.assign(n, 1);
-    work.builds.resize(n);
-    std::uint32_t previous_key = UINT32_MAX;
-    for (std::uint32_t h = 0; h < n; ++h) {
-      const auto home = grid.coords_of(coordinates.x[h], coordinates.y[h], coordinates.z[h]);
-      const std::uint32_t key = grid.key(home[0], home[1], home[2]);
-      nb.build(grid, registry_, stencil, home);
-      work.tests[h] = tests_of(slot_of(h));
-      work.builds[h] = key != previous_key ? 1 : 0;
-      previous_key = key;
-    }
-  } else {
-    work.tests.assign(grid.key_count(), 0);
-    work.homes.assign(grid.key_count(), 0);
-    work.builds.assign(grid.key_count(), 0);
-    for (std::uint64_t key = 0; key < grid.key_count(); ++key) {
-      const std::uint32_t begin = registry_.cell_begin[key], end = registry_.cell_begin[key + 1];
-      if (begin == end) continue;
-      const std::uint32_t first = registry_.slot_particle[begin];
-      nb.build(grid, registry_, stencil,
-               grid.coords_of(scene.x[first], scene.y[first], scene.z[first]));
-      for (std::uint32_t s = begin; s < end; ++s) work.tests[key] += tests_of(s);
-      work.homes[key] = end - begin;
-      work.builds[key] = 1;
-    }
-  }
+  work.tests.assign(iterations, 0);
+  work.homes.assign(iterations, 0);
+  work.builds.assign(iterations, 0);
+  WorkCountOp op{work};
+  // Only the cells are read: double coordinates in the working order, whatever the precision.
+  with_layout(scene, Precision::kDouble, run, [&](const auto& layout) {
+    traversal::traverse({grid, registry_, variant.loop, variant.stencil, options.homes}, layout,
+                        op);
+  });
   return work;
 }
 

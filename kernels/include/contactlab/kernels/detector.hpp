@@ -63,12 +63,27 @@ class DetectionObserver {
 // OMP_NUM_THREADS. Positive counts are returned as they are.
 int resolve_threads(int requested);
 
+// The owned particles, input rows [first, last): the traversal's only homes. The others
+// (ghosts: copies of a neighbouring domain's particles) sit in the grid and are tested as
+// partners of owned homes, never as homes. So with the full stencil the row of an owned
+// particle lists all its contacts, ghosts included, and a ghost's row is empty. The half
+// stencil finds a pair only from the particle it makes the home (the one whose cell comes
+// first in (z, y, x) order, or the earlier slot of a shared cell), so it finds every pair of
+// two owned particles (in both rows) but only the owned-ghost pairs whose home is owned.
+struct HomeRange {
+  std::uint32_t first = 0;
+  std::uint32_t last = UINT32_MAX;  // past the particle count = up to the last particle
+  bool contains(std::uint32_t i) const { return i >= first && i < last; }
+  bool covers(std::uint32_t n) const { return first == 0 && last >= n; }
+};
+
 struct DetectOptions {
   Variant variant;
   // Contact diameter D for scenes without per-particle diameters; ignored otherwise.
   double diameter = 0.0;
   int threads = 0;  // 0 = resolve_threads(0)
   DetectionObserver* observer = nullptr;
+  HomeRange homes{};  // default: every particle is owned
 };
 
 struct DetectRun {
@@ -104,6 +119,16 @@ class ContactDetector {
   // it. Costs one registration and a pass over the stencils.
   LoopWork iteration_work(const Scene& scene, const DetectOptions& options);
 
+  // Half neighbour list for DEM: every pair within r_i + r_j + skin (D + skin without
+  // per-particle diameters) of which at least one particle is owned (options.homes), stored
+  // once: in the row of the smaller input row, or of the owned one where the other is a
+  // ghost. Rows in input ids, ascending (canonical); ghost rows are empty. The test is the
+  // contact test of pair_test.hpp with every diameter (or D) widened by skin, in the variant's
+  // precision, and the grid is built for the largest reach. Uses the variant's loop, order,
+  // schedule and precision; always the full stencil (the half one would miss owned-ghost
+  // pairs, see HomeRange). Replaces contacts(). Throws InputError for skin < 0.
+  ContactList neighbor_list(const Scene& scene, const DetectOptions& options, double skin);
+
   // Contacts of the last run in working ids (see working_to_input()).
   const ContactList& contacts() const { return contacts_; }
   // Working id -> input row; empty when the working order is the input order.
@@ -115,10 +140,13 @@ class ContactDetector {
   ContactList canonical_contacts() const { return canonicalize(contacts_, working_to_input()); }
 
  private:
-  CellGrid prepare(const Scene& scene, const DetectOptions& options, DetectRun& run);
-  template <class Layout>
-  void detect(const CellGrid& grid, const Layout& layout, const DetectOptions& options,
-              DetectRun& run);
+  CellGrid prepare(const Scene& scene, const DetectOptions& options, double skin, DetectRun& run);
+  template <class F>
+  void with_layout(const Scene& scene, Precision precision, DetectRun& run, F&& f);
+  template <class Layout, class PairTest>
+  void detect(const CellGrid& grid, const Layout& layout, const PairTest& test,
+              const DetectOptions& options, DetectRun& run);
+  void assemble_rows(int thread, int threads, bool half);
 
   CellRegistry registry_;
   Scene sorted_;  // coordinates in slot order, for the sorted orders

@@ -1,0 +1,248 @@
+// The cell-stencil traversal, written once for every use (contact lists, per-iteration work
+// counts, neighbour lists): what is done with a candidate pair is the caller's PairOp.
+//
+// traverse(spec, layout, op) runs the variant's loop (cells or particles) over the home
+// particles with the variant's stencil (27 cells or own cell + 13 forward) and calls, per home,
+//
+//   auto sink = op.begin_home(home);   // home: particle, slot, loop iteration, tests, built
+//   sink(j, dx, dy, dz);               // per candidate j, dx = x_home - x_j (if Op::kTestsPairs)
+//   op.end_home(home, sink);
+//
+// The sink is a value local to the loop, so the per-candidate state of an op (the next free
+// place of a branchless append, a count) stays in registers. Ops with kTestsPairs = false see
+// only the homes (with their test counts) and no candidate is read.
+//
+// The loop is an orphaned `omp for schedule(runtime) nowait`: called inside a parallel region
+// each thread visits its share of the homes with its own op; called outside one, it is serial.
+#pragma once
+
+#include <algorithm>
+#include <array>
+#include <cstdint>
+#include <type_traits>
+
+#include "contactlab/kernels/cell_grid.hpp"
+#include "contactlab/kernels/detector.hpp"
+#include "contactlab/kernels/variant.hpp"
+
+namespace contactlab::traversal {
+
+// The stencil as rows of cells along x: for each (dy, dz) the cells dx in [dx_lo, dx_hi].
+// With the linear numbering a row's cells are consecutive keys, so its particles are one slot
+// range found with two loads. Rows are in ascending key order (z, then y).
+struct StencilRow {
+  int dy, dz, dx_lo, dx_hi;
+};
+
+struct StencilRows {
+  std::array<StencilRow, 9> rows{};
+  int count = 0;
+  int own = 0;  // the row holding the home cell
+};
+
+inline StencilRows make_stencil(Stencil stencil) {
+  StencilRows result;
+  for (int dz = -1; dz <= 1; ++dz) {
+    for (int dy = -1; dy <= 1; ++dy) {
+      // Forward half: own cell and the cells (dz, dy, dx) lexicographically after (0, 0, 0),
+      // so each unordered pair of distinct neighbour cells is visited from one of them only.
+      const bool before_own = dz < 0 || (dz == 0 && dy < 0);
+      if (stencil == Stencil::kHalf && before_own) continue;
+      const bool own = dz == 0 && dy == 0;
+      if (own) result.own = result.count;
+      const int dx_lo = stencil == Stencil::kHalf && own ? 0 : -1;
+      result.rows[result.count++] = {dy, dz, dx_lo, 1};
+    }
+  }
+  return result;
+}
+
+struct SlotRange {
+  std::uint32_t begin, end;
+};
+
+// The particles of a home cell's stencil as slot ranges, ranges[own] holding the home cell.
+// With the half stencil ranges[own] starts at the home cell (no stencil cell precedes it).
+struct NeighbourRanges {
+  std::array<SlotRange, 27> ranges{};
+  int count = 0;
+  int own = 0;
+  std::uint64_t candidates = 0;  // slots in all ranges, the home particle's own included
+
+  // Pair tests of the home particle in slot s_h: with the half stencil only the own range's
+  // later slots, with the full one every slot but its own.
+  std::uint64_t tests_from(std::uint32_t s_h, bool half) const {
+    return candidates - (half ? s_h + 1 - ranges[own].begin : 1);
+  }
+
+  void build(const CellGrid& grid, const CellRegistry& registry, const StencilRows& stencil,
+             const std::array<int, 3>& home) {
+    count = 0;
+    candidates = 0;
+    const auto& dims = grid.dims();
+    const std::uint32_t* begin_of = registry.cell_begin.data();
+    const bool linear = grid.numbering() == CellNumbering::kLinear;
+    for (int r = 0; r < stencil.count; ++r) {
+      const StencilRow& row = stencil.rows[r];
+      const int cy = home[1] + row.dy, cz = home[2] + row.dz;
+      if (cy < 0 || cz < 0 || cy >= dims[1] || cz >= dims[2]) continue;
+      const int x_lo = std::max(home[0] + row.dx_lo, 0);
+      const int x_hi = std::min(home[0] + row.dx_hi, dims[0] - 1);
+      if (linear) {
+        if (r == stencil.own) own = count;
+        const SlotRange range{begin_of[grid.key(x_lo, cy, cz)],
+                              begin_of[grid.key(x_hi, cy, cz) + 1]};
+        if (range.begin == range.end) continue;  // never the own row: it holds the home
+        ranges[count++] = range;
+        candidates += range.end - range.begin;
+        continue;
+      }
+      // Morton keys of a row are not consecutive: one range per cell.
+      for (int cx = x_lo; cx <= x_hi; ++cx) {
+        const std::uint32_t key = grid.key(cx, cy, cz);
+        const SlotRange range{begin_of[key], begin_of[key + 1]};
+        if (range.begin == range.end) continue;  // never the home cell
+        if (r == stencil.own && cx == home[0]) own = count;
+        ranges[count++] = range;
+        candidates += range.end - range.begin;
+      }
+    }
+  }
+};
+
+// Where the traversal reads particles. `cell_x/y/z` are the double coordinates the particles
+// were registered with (a home particle's cell must be found exactly as registration did);
+// `x/y/z/d` are the coordinates the pair ops read, in the variant's precision T (d is null
+// without per-particle diameters).
+template <class T>
+struct Coordinates {
+  const double *cell_x, *cell_y, *cell_z;
+  const T *x, *y, *z, *d;
+};
+
+// Coordinates stored in slot order: working id == slot, no indirection.
+template <class T>
+struct SortedLayout : Coordinates<T> {
+  using Real = T;
+  const std::uint32_t* slot_particle;  // slot -> input row
+  std::uint32_t particle_at(std::uint32_t slot) const { return slot; }
+  std::uint32_t slot_of(std::uint32_t particle) const { return particle; }
+  std::uint32_t input_of(std::uint32_t particle) const { return slot_particle[particle]; }
+};
+
+// Coordinates in input order: cell lists map slots to input ids (the paper's unsorted case).
+template <class T>
+struct UnsortedLayout : Coordinates<T> {
+  using Real = T;
+  const std::uint32_t* slot_particle;
+  const std::uint32_t* particle_slot;
+  std::uint32_t particle_at(std::uint32_t slot) const { return slot_particle[slot]; }
+  std::uint32_t slot_of(std::uint32_t particle) const { return particle_slot[particle]; }
+  std::uint32_t input_of(std::uint32_t particle) const { return particle; }
+};
+
+// What to traverse: the registered grid, the variant's loop and stencil, and the homes.
+struct Spec {
+  const CellGrid& grid;
+  const CellRegistry& registry;
+  LoopKind loop;
+  Stencil stencil;
+  HomeRange homes;  // input rows; every registered particle is a candidate
+};
+
+// One visit of a home particle, as an op sees it.
+struct Home {
+  std::uint32_t particle;   // working id
+  std::uint32_t slot;       // its slot in the cell lists
+  std::uint64_t iteration;  // of the parallel loop: the cell's key, or the particle
+  std::uint64_t tests;      // candidates it is tested against (the home itself excluded)
+  bool built;               // whether the stencil's ranges were built for it
+};
+
+// Calls sink(j, dx, dy, dz) for every candidate of the home in slot s_h, in slot order
+// within each stencil range (the order of the partners in a contact row).
+template <bool kHalf, class Layout, class Sink>
+inline void for_each_candidate(const Layout& layout, const NeighbourRanges& nb, std::uint32_t h,
+                               std::uint32_t s_h, Sink& sink) {
+  using Real = typename Layout::Real;
+  const Real xi = layout.x[h], yi = layout.y[h], zi = layout.z[h];
+  auto visit_range = [&](std::uint32_t begin, std::uint32_t end) {
+    for (std::uint32_t s = begin; s < end; ++s) {
+      const std::uint32_t j = layout.particle_at(s);
+      sink(j, xi - layout.x[j], yi - layout.y[j], zi - layout.z[j]);
+    }
+  };
+  for (int r = 0; r < nb.count; ++r) {
+    const SlotRange range = nb.ranges[r];
+    if (r != nb.own) {
+      visit_range(range.begin, range.end);
+    } else if constexpr (kHalf) {
+      // The range starts at the home cell: only its later slots and the cells after it.
+      visit_range(s_h + 1, range.end);
+    } else {
+      visit_range(range.begin, s_h);
+      visit_range(s_h + 1, range.end);
+    }
+  }
+}
+
+template <bool kHalf, class Layout, class Op>
+void traverse_with(const Spec& spec, const Layout& layout, Op& op) {
+  const CellGrid& grid = spec.grid;
+  const CellRegistry& registry = spec.registry;
+  const std::uint32_t n = static_cast<std::uint32_t>(registry.slot_particle.size());
+  const StencilRows stencil = make_stencil(spec.stencil);
+  const bool all_owned = spec.homes.covers(n);
+  NeighbourRanges nb;
+  auto visit = [&](std::uint32_t h, std::uint32_t s_h, std::uint64_t iteration, bool built) {
+    const Home home{h, s_h, iteration, nb.tests_from(s_h, kHalf), built};
+    auto sink = op.begin_home(home);
+    if constexpr (Op::kTestsPairs) for_each_candidate<kHalf>(layout, nb, h, s_h, sink);
+    op.end_home(home, sink);
+  };
+  if (spec.loop == LoopKind::kParticle) {
+    std::uint32_t cached_key = UINT32_MAX;  // ranges are reused while the cell stays the same
+#pragma omp for schedule(runtime) nowait
+    for (std::uint32_t h = 0; h < n; ++h) {
+      if (!all_owned && !spec.homes.contains(layout.input_of(h))) continue;
+      const auto home = grid.coords_of(layout.cell_x[h], layout.cell_y[h], layout.cell_z[h]);
+      const std::uint32_t key = grid.key(home[0], home[1], home[2]);
+      const bool built = key != cached_key;
+      if (built) {
+        nb.build(grid, registry, stencil, home);
+        cached_key = key;
+      }
+      visit(h, layout.slot_of(h), h, built);
+    }
+  } else {
+    const std::uint64_t keys = grid.key_count();
+#pragma omp for schedule(runtime) nowait
+    for (std::uint64_t key = 0; key < keys; ++key) {
+      const std::uint32_t begin = registry.cell_begin[key];
+      const std::uint32_t end = registry.cell_begin[key + 1];
+      if (begin == end) continue;
+      const std::uint32_t first = layout.particle_at(begin);
+      nb.build(grid, registry, stencil,
+               grid.coords_of(layout.cell_x[first], layout.cell_y[first], layout.cell_z[first]));
+      bool built = true;  // reported with the cell's first home
+      for (std::uint32_t s = begin; s < end; ++s) {
+        const std::uint32_t h = layout.particle_at(s);
+        if (!all_owned && !spec.homes.contains(layout.input_of(h))) continue;
+        visit(h, s, key, built);
+        built = false;
+      }
+    }
+  }
+}
+
+// The traversal, with the stencil chosen at compile time.
+template <class Layout, class Op>
+void traverse(const Spec& spec, const Layout& layout, Op& op) {
+  if (spec.stencil == Stencil::kHalf) {
+    traverse_with<true>(spec, layout, op);
+  } else {
+    traverse_with<false>(spec, layout, op);
+  }
+}
+
+}  // namespace contactlab::traversal
