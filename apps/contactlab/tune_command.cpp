@@ -75,31 +75,25 @@ tn::TuneOptions TuneCommand::options() const {
 }
 
 // One line per method, then the classic schedules and the predictions for other thread counts.
-void print_report(const nlohmann::json& report) {
-  for (const auto& method : report["methods"]) {
+void print_report(const tn::TuneDocument& report) {
+  for (const tn::MethodEntry& method : report.methods) {
     std::string measured = "not measured";
-    if (method.contains("measured")) {
-      measured = fmt::format(
-          "measured T_c {:.4f} s [{:.4f}, {:.4f}]  regret {:+.1f}% [{:+.1f}, {:+.1f}]",
-          method["measured"]["median_s"].get<double>(),
-          method["measured"]["ci95_low_s"].get<double>(),
-          method["measured"]["ci95_high_s"].get<double>(), 100.0 * method["regret"].get<double>(),
-          100.0 * method["regret_ci95"][0].get<double>(),
-          100.0 * method["regret_ci95"][1].get<double>());
+    if (method.measured) {
+      measured =
+          fmt::format("measured T_c {:.4f} s [{:.4f}, {:.4f}]  regret {:+.1f}% [{:+.1f}, {:+.1f}]",
+                      method.measured->median_s, method.measured->ci95_low_s,
+                      method.measured->ci95_high_s, 100.0 * method.regret.value_or(0.0),
+                      100.0 * method.regret_ci95.value()[0], 100.0 * method.regret_ci95.value()[1]);
     }
-    fmt::print("{:<11} {:<40} cost {:7.2f} s  {}\n", method["method"].get<std::string>(),
-               method["variant"].get<std::string>(), method["tuning_cost_s"].get<double>(),
-               measured);
+    fmt::print("{:<11} {:<40} cost {:7.2f} s  {}\n", method.method, method.variant,
+               method.tuning_cost_s, measured);
   }
-  for (const auto& c : report["classic"]) {
-    fmt::print(
-        "  classic {:<24} k = {:<7} {}\n", c["name"].get<std::string>(), c["chunk"].get<int>(),
-        c.contains("regret") ? fmt::format("regret {:+.1f}%", 100.0 * c["regret"].get<double>())
-                             : "");
+  for (const tn::ClassicEntry& c : report.classic) {
+    fmt::print("  classic {:<24} k = {:<7} {}\n", c.name, c.chunk,
+               c.regret ? fmt::format("regret {:+.1f}%", 100.0 * *c.regret) : "");
   }
-  for (const auto& p : report["predictions"]) {
-    fmt::print("  {} threads: {} ({})\n", p["threads"].get<int>(), p["variant"].get<std::string>(),
-               p["label"].get<std::string>());
+  for (const tn::Prediction& p : report.predictions) {
+    fmt::print("  {} threads: {} ({})\n", p.threads, p.variant, p.label);
   }
 }
 
@@ -115,13 +109,14 @@ int TuneCommand::run() const {
       tn::machine_calibration(cache, options, options.threads, recalibrate_);
   const tn::TuneReport report =
       tn::tune(scene, scene_record, diameter, options, calibration, command_line_);
-  print_report(report.json);
+  print_report(report.document);
   if (!predict_only_) {
     cache.store_choice(scene_record, diameter, options.threads, report.chosen, 0.0);
   }
   if (!json_out_.empty()) {
-    write_file_atomically(json_out_,
-                          [&](std::ostream& out) { out << report.json.dump(2) << '\n'; });
+    write_file_atomically(json_out_, [&](std::ostream& out) {
+      out << tn::to_json_value(report.document).dump(2) << '\n';
+    });
   }
   return 0;
 }

@@ -20,14 +20,9 @@
 namespace contactlab::tuner {
 namespace {
 
-using nlohmann::json;
-
-json summary_json(const std::vector<double>& samples) {
+VerifiedTiming timing_of(const std::vector<double>& samples) {
   const Summary s = summarize(samples);
-  return {{"median_s", s.median},
-          {"ci95_low_s", s.interval.low},
-          {"ci95_high_s", s.interval.high},
-          {"samples_s", samples}};
+  return {s.median, s.interval.low, s.interval.high, samples};
 }
 
 // The final verification's timings: `rounds` samples of every distinct variant among the
@@ -72,16 +67,16 @@ class Verification {
   std::size_t distinct_count() const { return distinct_.size(); }
 
   // The verified timings of one contender and its regrets, into its report entry.
-  void attach(json& target, const std::string& name) const {
-    target["measured"] = summary_json(samples_of(name));
+  void attach(Verified& target, const std::string& name) const {
+    target.measured = timing_of(samples_of(name));
     const PairedRatio to_best = paired_ratio(samples_of(name), best_samples());
-    target["regret"] = to_best.median - 1.0;
-    target["regret_ci95"] = {to_best.interval.low - 1.0, to_best.interval.high - 1.0};
+    target.regret = to_best.median - 1.0;
+    target.regret_ci95 = {to_best.interval.low - 1.0, to_best.interval.high - 1.0};
     if (has("exhaustive")) {
       const PairedRatio to_exhaustive = paired_ratio(samples_of(name), samples_of("exhaustive"));
-      target["vs_exhaustive"] = {
-          {"ratio_minus_one", to_exhaustive.median - 1.0},
-          {"ci95", {to_exhaustive.interval.low - 1.0, to_exhaustive.interval.high - 1.0}}};
+      target.vs_exhaustive =
+          RatioToExhaustive{to_exhaustive.median - 1.0,
+                            {to_exhaustive.interval.low - 1.0, to_exhaustive.interval.high - 1.0}};
     }
   }
 
@@ -92,24 +87,26 @@ class Verification {
   std::size_t best_ = 0;
 };
 
-// Classic formulas for the structure that is tuned, as report entries and named contenders.
-json classic_entries(const PricedStructure& structure, int threads) {
-  json classic = json::array();
+// Classic formulas for the structure that is tuned, as report entries.
+std::vector<ClassicEntry> classic_entries(const PricedStructure& structure, int threads) {
+  std::vector<ClassicEntry> classic;
   const WorkView work{structure.work.tests, structure.work.homes, structure.work.builds};
   for (const NamedChunk& c : classic_chunks(work, threads, structure.costs)) {
-    classic.push_back({{"name", c.name},
-                       {"chunk", c.chunk},
-                       {"inputs", c.inputs},
-                       {"structure", structure_key(structure.variant)}});
+    ClassicEntry entry;
+    entry.name = c.name;
+    entry.chunk = c.chunk;
+    entry.inputs = c.inputs;
+    entry.structure = structure_key(structure.variant);
+    classic.push_back(std::move(entry));
   }
   return classic;
 }
 
 }  // namespace
 
-TuneReport tune_kernel(MeasuredKernel& kernel, const json& scene_description,
-                       const TuneOptions& options, const Calibration& calibration,
-                       const std::string& command_line) {
+TuneReport tune_kernel(MeasuredKernel& kernel, const SceneRecord& scene,
+                       std::optional<double> diameter, const TuneOptions& options,
+                       const Calibration& calibration, const std::string& command_line) {
   const int threads = resolve_threads(options.threads);
   if (options.chunk_grid.empty()) throw InputError("tune: the chunk grid is empty");
   if (options.search_samples < 1 || options.exhaustive_rounds < 1 || options.verify_rounds < 1) {
@@ -118,51 +115,42 @@ TuneReport tune_kernel(MeasuredKernel& kernel, const json& scene_description,
         ">= 1",
         options.search_samples, options.exhaustive_rounds, options.verify_rounds));
   }
-  json report = scene_description;
-  report["schema_version"] = kTuneSchemaVersion;
-  report["context"] = collect_context(command_line, threads);
-  report["threads"] = threads;
-  report["chunk_grid"] = options.chunk_grid;
-  report["calibration"] = {{"source", calibration.source}, {"seconds", calibration.seconds}};
+  TuneReport result;
+  TuneDocument& report = result.document;
+  report.context = collect_context(command_line, threads);
+  report.scene = scene;
+  report.diameter = diameter;
+  report.threads = threads;
+  report.chunk_grid = options.chunk_grid;
+  report.calibration = {calibration.source, calibration.seconds};
 
   TuningState state{kernel, options, calibration, threads, report};
-  json methods = json::array();
   for (const auto& method : tuning_methods()) {
     if (!method->enabled(options) || (options.predict_only && method->times_runs())) continue;
-    methods.push_back(method->choose(state));
+    report.methods.push_back(method->choose(state));
   }
   const PricedStructure& tuned = state.tuned ? *state.tuned : *state.model_best;
-  report["classic"] = classic_entries(tuned, threads);
-  TuneReport result;
+  report.classic = classic_entries(tuned, threads);
   // What --variant auto uses: the last choice (the search's; the model's with predict_only).
   result.chosen = state.choices.back().second;
-  if (!options.predict_only) {
-    // Verification: each method's choice and each classic formula's k timed alike, every
-    // distinct variant once per round in a new random order. Comparisons are paired ratios
-    // within rounds (drift of the machine cancels), and regret is against the fastest
-    // verified choice, not the minimum of the exhaustive sweep's own medians (biased low).
-    std::vector<std::pair<std::string, Variant>> contenders = state.choices;
-    for (const auto& c : report["classic"]) {
-      contenders.emplace_back(
-          "classic:" + c["name"].get<std::string>(),
-          with_schedule(tuned.variant, state.tuned_kind, c["chunk"].get<int>()));
-    }
-    const Verification verified(kernel, threads, contenders, options.verify_rounds);
-    report["verification"] = {
-        {"rounds", options.verify_rounds},
-        {"distinct_variants", verified.distinct_count()},
-        {"best", to_string(verified.best())},
-        {"regret_against", "fastest verified choice; median of per-round paired ratios - 1"}};
-    for (json& entry : methods) verified.attach(entry, entry["method"].get<std::string>());
-    for (json& entry : report["classic"]) {
-      const std::string name = "classic:" + entry["name"].get<std::string>();
-      entry["variant"] =
-          to_string(with_schedule(tuned.variant, state.tuned_kind, entry["chunk"].get<int>()));
-      verified.attach(entry, name);
-    }
+  if (options.predict_only) return result;
+
+  // Verification: each method's choice and each classic formula's k timed alike, every
+  // distinct variant once per round in a new random order. Comparisons are paired ratios
+  // within rounds (drift of the machine cancels), and regret is against the fastest verified
+  // choice, not the minimum of the exhaustive sweep's own medians (biased low by noise).
+  std::vector<std::pair<std::string, Variant>> contenders = state.choices;
+  for (ClassicEntry& c : report.classic) {
+    const Variant variant = with_schedule(tuned.variant, state.tuned_kind, c.chunk);
+    c.variant = to_string(variant);
+    contenders.emplace_back("classic:" + c.name, variant);
   }
-  report["methods"] = methods;
-  result.json = std::move(report);
+  const Verification verified(kernel, threads, contenders, options.verify_rounds);
+  report.verification = VerificationSummary{
+      options.verify_rounds, static_cast<int>(verified.distinct_count()),
+      to_string(verified.best()), "fastest verified choice; median of per-round paired ratios - 1"};
+  for (MethodEntry& entry : report.methods) verified.attach(entry, entry.method);
+  for (ClassicEntry& entry : report.classic) verified.attach(entry, "classic:" + entry.name);
   return result;
 }
 
@@ -170,9 +158,9 @@ TuneReport tune(const Scene& scene, const SceneRecord& scene_record, double diam
                 const TuneOptions& options, const Calibration& calibration,
                 const std::string& command_line) {
   DetectionKernel kernel(scene, diameter);
-  const json description = {{"scene", scene_record},
-                            {"diameter", scene.has_diameters() ? json(nullptr) : json(diameter)}};
-  return tune_kernel(kernel, description, options, calibration, command_line);
+  return tune_kernel(kernel, scene_record,
+                     scene.has_diameters() ? std::nullopt : std::optional<double>(diameter),
+                     options, calibration, command_line);
 }
 
 }  // namespace contactlab::tuner

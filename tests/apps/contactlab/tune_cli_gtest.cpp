@@ -6,6 +6,7 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 
+#include "contactlab/tuner/tune_report.hpp"
 #include "program_test_support.hpp"
 
 namespace contactlab::test {
@@ -67,6 +68,11 @@ TEST(TuneCli, ReportsModelSearchExhaustiveWithRegretAndCost) {
   EXPECT_LT(t["methods"][1]["evaluations"].get<int>() * 3,
             t["methods"][2]["timed_runs"].get<int>());
   EXPECT_TRUE(t["context"].contains("machine"));
+  // The strict reader takes what tune wrote, and finds each method by name.
+  const tuner::TuneDocument typed = tuner::read_tune_document(dir + "/t.json");
+  ASSERT_NE(typed.method("exhaustive"), nullptr);
+  EXPECT_TRUE(typed.method("search")->regret.has_value());
+  EXPECT_EQ(typed.classic.size(), t["classic"].size());
 }
 
 TEST(TuneCli, VariantAutoTunesOnAMissThenUsesTheCache) {

@@ -14,7 +14,7 @@ class ExhaustiveMethod final : public TuningMethod {
   bool times_runs() const override { return true; }
   bool enabled(const TuneOptions& options) const override { return options.exhaustive; }
 
-  nlohmann::json choose(TuningState& state) override {
+  MethodEntry choose(TuningState& state) override {
     const double start = omp_get_wtime();
     const PricedStructure& tuned = state.tuned ? *state.tuned : *state.model_best;
     const ScheduleKind kind = state.tuned_kind;
@@ -33,14 +33,16 @@ class ExhaustiveMethod final : public TuningMethod {
     }
     const Variant chosen = with_schedule(tuned.variant, kind, all.fastest_chunk);
     state.choices.emplace_back("exhaustive", chosen);
-    return {{"method", "exhaustive"},
-            {"variant", to_string(chosen)},
-            {"chunk", all.fastest_chunk},
-            {"largest_equivalent_chunk", all.chosen_chunk},
-            {"rounds", state.options.exhaustive_rounds},
-            {"timed_runs", all.evaluations},
-            {"tuning_cost_s", omp_get_wtime() - start},
-            {"chunks_measured", points}};
+    MethodEntry entry;
+    entry.method = "exhaustive";
+    entry.variant = to_string(chosen);
+    entry.chunk = all.fastest_chunk;
+    entry.largest_equivalent_chunk = all.chosen_chunk;
+    entry.rounds = state.options.exhaustive_rounds;
+    entry.timed_runs = all.evaluations;
+    entry.tuning_cost_s = omp_get_wtime() - start;
+    entry.chunks_measured = points;
+    return entry;
   }
 };
 

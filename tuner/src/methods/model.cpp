@@ -34,7 +34,7 @@ class ModelMethod final : public TuningMethod {
   std::string_view name() const override { return "model"; }
   bool times_runs() const override { return false; }
 
-  nlohmann::json choose(TuningState& state) override {
+  MethodEntry choose(TuningState& state) override {
     const double start = omp_get_wtime();
     const TuneOptions& options = state.options;
     nlohmann::json table = nlohmann::json::array();
@@ -59,27 +59,24 @@ class ModelMethod final : public TuningMethod {
 
     // Other thread counts, from the model's structure.
     const PricedStructure& best = *state.model_best;
-    nlohmann::json predictions = nlohmann::json::array();
     for (const int p : options.predict_threads) {
       const auto [variant, seconds] =
           best_schedule(best.variant, view_of(best.work), p, best.costs, options.chunk_grid);
-      predictions.push_back(
-          {{"threads", p},
-           {"variant", to_string(variant)},
-           {"predicted_s", seconds},
-           {"label", p > omp_get_num_procs()
-                         ? "predicted (model only: more threads than this machine has)"
-                         : "predicted (model only)"}});
+      state.report.predictions.push_back(
+          {p, to_string(variant), seconds,
+           p > omp_get_num_procs() ? "predicted (model only: more threads than this machine has)"
+                                   : "predicted (model only)"});
     }
-    state.report["predictions"] = predictions;
     state.choices.emplace_back("model", best.model_choice);
-    return {{"method", "model"},
-            {"variant", to_string(best.model_choice)},
-            {"chunk", best.model_choice.schedule.chunk},
-            {"predicted_s", best.predicted_s},
-            {"timed_runs", 0},
-            {"tuning_cost_s", state.model_cost_s},
-            {"structures", table}};
+    MethodEntry entry;
+    entry.method = "model";
+    entry.variant = to_string(best.model_choice);
+    entry.chunk = best.model_choice.schedule.chunk;
+    entry.predicted_s = best.predicted_s;
+    entry.timed_runs = 0;
+    entry.tuning_cost_s = state.model_cost_s;
+    entry.structures = table;
+    return entry;
   }
 };
 

@@ -19,7 +19,7 @@ class SearchMethod final : public TuningMethod {
   std::string_view name() const override { return "search"; }
   bool times_runs() const override { return true; }
 
-  nlohmann::json choose(TuningState& state) override {
+  MethodEntry choose(TuningState& state) override {
     const TuneOptions& options = state.options;
     MeasuredKernel& kernel = state.kernel;
     const int threads = state.threads;
@@ -75,19 +75,21 @@ class SearchMethod final : public TuningMethod {
       points.push_back({{"chunk", m.chunk}, {"median_s", m.median_seconds}});
     }
     const int structures = static_cast<int>(state.structures.size());
-    return {{"method", "search"},
-            {"variant", to_string(chosen)},
-            {"chunk", searched.chosen_chunk},
-            {"timed_runs", searched.evaluations * options.search_samples +
-                               structures * (1 + options.search_samples)},
-            {"chunk_search_timed_runs", searched.evaluations * options.search_samples},
-            {"evaluations", searched.evaluations},
-            {"screening_cost_s", screening_cost},
-            {"model_cost_s", state.model_cost_s},
-            {"chunk_search_cost_s", cost - screening_cost - state.model_cost_s},
-            {"tuning_cost_s", cost},
-            {"screening", screening},
-            {"chunks_measured", points}};
+    MethodEntry entry;
+    entry.method = "search";
+    entry.variant = to_string(chosen);
+    entry.chunk = searched.chosen_chunk;
+    entry.timed_runs =
+        searched.evaluations * options.search_samples + structures * (1 + options.search_samples);
+    entry.chunk_search_timed_runs = searched.evaluations * options.search_samples;
+    entry.evaluations = searched.evaluations;
+    entry.screening_cost_s = screening_cost;
+    entry.model_cost_s = state.model_cost_s;
+    entry.chunk_search_cost_s = cost - screening_cost - state.model_cost_s;
+    entry.tuning_cost_s = cost;
+    entry.screening = screening;
+    entry.chunks_measured = points;
+    return entry;
   }
 };
 

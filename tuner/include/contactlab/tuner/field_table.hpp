@@ -86,8 +86,15 @@ struct NoCheck {
   constexpr void operator()(const JsonIn&, const M&) const {}
 };
 
-// Absent fields are errors unless the field is new and files written before it must still read.
-enum class Presence { kRequired, kMayBeAbsent };
+// Absent fields are errors unless the field is new and files written before it must still read,
+// or the field is a std::optional that only some records have (written only when it has a
+// value: e.g. a tuning method's own fields in the tune report).
+enum class Presence { kRequired, kMayBeAbsent, kOnlyWhenSet };
+
+template <class M>
+struct IsOptionalMember : std::false_type {};
+template <class M>
+struct IsOptionalMember<std::optional<M>> : std::true_type {};
 
 template <class T, class M, class Codec = PlainCodec, class Check = NoCheck>
 struct Field {
@@ -101,6 +108,10 @@ struct Field {
   constexpr auto may_be_absent() const {
     return Field{name_, member_, Presence::kMayBeAbsent, codec_, check_};
   }
+  constexpr auto only_when_set() const {
+    static_assert(IsOptionalMember<M>::value, "only_when_set() is for std::optional members");
+    return Field{name_, member_, Presence::kOnlyWhenSet, codec_, check_};
+  }
   template <class C>
   constexpr auto via(C other) const {
     return Field<T, M, C, Check>{name_, member_, presence_, other, check_};
@@ -113,11 +124,14 @@ struct Field {
   }
 
   void write_into(nlohmann::json& j, const T& record) const {
+    if constexpr (IsOptionalMember<M>::value) {
+      if (presence_ == Presence::kOnlyWhenSet && !(record.*member_)) return;
+    }
     j[name_] = codec_.encode(record.*member_);
   }
   void read_from(ObjectIn& o, T& record) const {
     std::optional<JsonIn> at;
-    if (presence_ == Presence::kMayBeAbsent) {
+    if (presence_ != Presence::kRequired) {
       at = o.optional_field(name_);
       if (!at) return;
     } else {

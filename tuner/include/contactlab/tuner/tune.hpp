@@ -17,11 +17,10 @@
 #include "contactlab/kernels/scene.hpp"
 #include "contactlab/kernels/variant.hpp"
 #include "contactlab/tuner/result_schema.hpp"
+#include "contactlab/tuner/tune_report.hpp"
 #include "contactlab/tuner_model/schedule_model.hpp"
 
 namespace contactlab::tuner {
-
-inline constexpr int kTuneSchemaVersion = 1;
 
 struct TuneOptions {
   int threads = 0;  // 0 = resolve_threads(0), OpenMP's default
@@ -71,19 +70,18 @@ std::string structure_key(const Variant& variant);
 Calibration calibrate_machine(const TuneOptions& options, int threads);
 
 struct TuneReport {
-  nlohmann::json json;  // the tune.json document (docs/tuning.md)
-  Variant chosen;       // what `--variant auto` uses: the search's choice (the model's with
-                        // predict_only)
+  TuneDocument document;  // the tune.json document (docs/tuning.md)
+  Variant chosen;         // what `--variant auto` uses: the search's choice (the model's with
+                          // predict_only)
 };
 
 class MeasuredKernel;
 
-// Tunes any kernel with the registered methods (tuning_method.hpp); `scene_description` holds
-// the report's description of what the kernel runs on (e.g. "scene" and "diameter").
-// Throws InputError for bad options.
-TuneReport tune_kernel(MeasuredKernel& kernel, const nlohmann::json& scene_description,
-                       const TuneOptions& options, const Calibration& calibration,
-                       const std::string& command_line);
+// Tunes any kernel with the registered methods (tuning_method.hpp); `scene` and `diameter`
+// describe what the kernel runs on, for the report. Throws InputError for bad options.
+TuneReport tune_kernel(MeasuredKernel& kernel, const SceneRecord& scene,
+                       std::optional<double> diameter, const TuneOptions& options,
+                       const Calibration& calibration, const std::string& command_line);
 
 // Contact detection of `scene`. Throws InputError for bad options. `scene_record` describes the
 // scene for the report.

@@ -35,7 +35,7 @@ struct PricedStructure {
 
 struct TuningState {
   TuningState(MeasuredKernel& kernel_, const TuneOptions& options_, const Calibration& calibration_,
-              int threads_, nlohmann::json& report_)
+              int threads_, TuneDocument& report_)
       : kernel(kernel_),
         options(options_),
         calibration(calibration_),
@@ -46,7 +46,7 @@ struct TuningState {
   const TuneOptions& options;
   const Calibration& calibration;
   int threads = 1;
-  nlohmann::json& report;  // the tune.json document being written
+  TuneDocument& report;  // the tune.json document being written
 
   // Set by the model.
   std::vector<PricedStructure> structures;
@@ -70,7 +70,7 @@ class TuningMethod {
   virtual bool enabled(const TuneOptions& /*options*/) const { return true; }
   // Chooses; returns the method's entry of the report's "methods" (its verified timings and
   // regret are added later under the same name).
-  virtual nlohmann::json choose(TuningState& state) = 0;
+  virtual MethodEntry choose(TuningState& state) = 0;
 };
 
 const std::vector<std::unique_ptr<TuningMethod>>& tuning_methods();
