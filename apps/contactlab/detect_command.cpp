@@ -24,12 +24,7 @@ struct DetectCommand {
   SceneOptions scene_;
   std::string variant_ = "particle/sorted/full/static,200";
   int threads_ = 0;
-  int repeat_ = 3;
-  int warmup_ = 1;
-  bool adaptive_ = false;
-  double target_ci_ = 0.02;
-  double time_budget_ = 60.0;
-  int max_repeat_ = 200;
+  tn::RepetitionPolicy repetition_;  // its defaults are the options' defaults
   bool papi_ = false;
   std::string papi_events_;
   std::string cache_sim_;
@@ -49,14 +44,14 @@ void DetectCommand::add_to(CLI::App& sub) {
                  "loop/order[/stencil]/schedule[/float], or auto (the tuner's cached choice)");
   sub.add_option("--cache", cache_file_, "tuning cache file for --variant auto");
   sub.add_option("--threads", threads_, "OpenMP threads (0 = all)");
-  sub.add_option("--repeat", repeat_, "timed repetitions");
-  sub.add_option("--warmup", warmup_, "untimed runs first");
-  sub.add_flag("--adaptive", adaptive_,
+  sub.add_option("--repeat", repetition_.repeat, "timed repetitions");
+  sub.add_option("--warmup", repetition_.warmup, "untimed runs first");
+  sub.add_flag("--adaptive", repetition_.adaptive,
                "repeat until the median's 95% interval is within --target-ci (--repeat = minimum)");
-  sub.add_option("--target-ci", target_ci_,
+  sub.add_option("--target-ci", repetition_.target_relative_half_width,
                  "adaptive: target relative half-width of the median's interval (0.02 = 2%)");
-  sub.add_option("--time-budget", time_budget_, "adaptive: seconds before giving up");
-  sub.add_option("--max-repeat", max_repeat_, "adaptive: most timed repetitions");
+  sub.add_option("--time-budget", repetition_.time_budget_s, "adaptive: seconds before giving up");
+  sub.add_option("--max-repeat", repetition_.max_repeat, "adaptive: most timed repetitions");
   sub.add_flag("--papi", papi_, "count L1/L2 data-cache misses per thread with PAPI");
   sub.add_option("--papi-events", papi_events_,
                  "count these PAPI events instead (comma-separated, e.g. perf::TASK-CLOCK)");
@@ -69,16 +64,18 @@ void DetectCommand::add_to(CLI::App& sub) {
 
 // Option values that are wrong whatever the scene: rejected before any work.
 void DetectCommand::check() const {
-  if (repeat_ < 1) throw InputError("--repeat must be >= 1");
-  if (warmup_ < 0) throw InputError("--warmup must be >= 0");
+  if (repetition_.repeat < 1) throw InputError("--repeat must be >= 1");
+  if (repetition_.warmup < 0) throw InputError("--warmup must be >= 0");
   if (threads_ < 0) throw InputError("--threads must be >= 0");
-  if (adaptive_) {
-    if (!(target_ci_ > 0.0 && target_ci_ < 1.0)) {
-      throw InputError(
-          fmt::format("--target-ci must be in (0, 1) (a fraction: 0.02 = 2%), got {}", target_ci_));
+  if (repetition_.adaptive) {
+    if (!(repetition_.target_relative_half_width > 0.0 &&
+          repetition_.target_relative_half_width < 1.0)) {
+      throw InputError(fmt::format("--target-ci must be in (0, 1) (a fraction: 0.02 = 2%), got {}",
+                                   repetition_.target_relative_half_width));
     }
-    if (!(time_budget_ > 0.0)) throw InputError("--time-budget must be > 0 seconds");
-    if (max_repeat_ < repeat_) throw InputError("--max-repeat must be >= --repeat");
+    if (!(repetition_.time_budget_s > 0.0)) throw InputError("--time-budget must be > 0 seconds");
+    if (repetition_.max_repeat < repetition_.repeat)
+      throw InputError("--max-repeat must be >= --repeat");
   }
 }
 
@@ -143,7 +140,7 @@ int DetectCommand::run() const {
 
   DetectOptions options{variant, diameter, threads, nullptr};
   tn::MeasureOptions measure;
-  measure.repetition = {warmup_, repeat_, adaptive_, target_ci_, time_budget_, max_repeat_, 0.95};
+  measure.repetition = repetition_;
   measure.papi = papi ? &*papi : nullptr;
   ContactDetector detector;
   tn::RunRecord run = tn::measure_detection(detector, scene, scene_record, options, measure);
