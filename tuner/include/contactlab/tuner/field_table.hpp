@@ -91,10 +91,12 @@ struct NoCheck {
 // value: e.g. a tuning method's own fields in the tune report).
 enum class Presence { kRequired, kMayBeAbsent, kOnlyWhenSet };
 
-template <class M>
-struct IsOptionalMember : std::false_type {};
-template <class M>
-struct IsOptionalMember<std::optional<M>> : std::true_type {};
+namespace detail {
+template <class T>
+struct IsOptional : std::false_type {};
+template <class T>
+struct IsOptional<std::optional<T>> : std::true_type {};
+}  // namespace detail
 
 template <class T, class M, class Codec = PlainCodec, class Check = NoCheck>
 struct Field {
@@ -109,7 +111,7 @@ struct Field {
     return Field{name_, member_, Presence::kMayBeAbsent, codec_, check_};
   }
   constexpr auto only_when_set() const {
-    static_assert(IsOptionalMember<M>::value, "only_when_set() is for std::optional members");
+    static_assert(detail::IsOptional<M>::value, "only_when_set() is for std::optional members");
     return Field{name_, member_, Presence::kOnlyWhenSet, codec_, check_};
   }
   template <class C>
@@ -124,7 +126,7 @@ struct Field {
   }
 
   void write_into(nlohmann::json& j, const T& record) const {
-    if constexpr (IsOptionalMember<M>::value) {
+    if constexpr (detail::IsOptional<M>::value) {
       if (presence_ == Presence::kOnlyWhenSet && !(record.*member_)) return;
     }
     j[name_] = codec_.encode(record.*member_);
@@ -224,10 +226,6 @@ constexpr FieldList<T, M, N> field_list(const std::array<std::pair<const char*, 
 }
 
 namespace detail {
-template <class T>
-struct IsOptional : std::false_type {};
-template <class T>
-struct IsOptional<std::optional<T>> : std::true_type {};
 template <class T>
 struct IsSequence : std::false_type {};
 template <class T>
