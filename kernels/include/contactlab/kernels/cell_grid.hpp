@@ -47,8 +47,11 @@ class CellGrid {
     if (numbering_ == CellNumbering::kLinear) {
       return static_cast<std::uint32_t>((cz * dims_[1] + cy) * dims_[0] + cx);
     }
-    return spread_bits(cx) | (spread_bits(cy) << 1) | (spread_bits(cz) << 2);
+    return morton_part(0, cx) | morton_part(1, cy) | morton_part(2, cz);
   }
+  // A Morton key is the OR of one part per axis, so a stencil row computes its y and z parts
+  // once and each cell adds its x part (the bit interleave is most of a key's cost).
+  static std::uint32_t morton_part(int axis, int c) { return spread_bits(c) << axis; }
 
  private:
   int axis_coord(int axis, double v) const {

@@ -82,6 +82,10 @@ struct NeighbourRanges {
     const auto& dims = grid.dims();
     const std::uint32_t* begin_of = registry.cell_begin.data();
     const bool linear = grid.numbering() == CellNumbering::kLinear;
+    std::array<std::uint32_t, 3> x_part{};  // Morton: the x parts of the home's x - 1 .. x + 1
+    if (!linear) {
+      for (int i = 0; i < 3; ++i) x_part[i] = CellGrid::morton_part(0, home[0] - 1 + i);
+    }
     for (int r = 0; r < stencil.count; ++r) {
       const StencilRow& row = stencil.rows[r];
       const int cy = home[1] + row.dy, cz = home[2] + row.dz;
@@ -98,8 +102,9 @@ struct NeighbourRanges {
         continue;
       }
       // Morton keys of a row are not consecutive: one range per cell.
+      const std::uint32_t yz_part = CellGrid::morton_part(1, cy) | CellGrid::morton_part(2, cz);
       for (int cx = x_lo; cx <= x_hi; ++cx) {
-        const std::uint32_t key = grid.key(cx, cy, cz);
+        const std::uint32_t key = x_part[cx - home[0] + 1] | yz_part;
         const SlotRange range{begin_of[key], begin_of[key + 1]};
         if (range.begin == range.end) continue;  // never the home cell
         if (r == stencil.own && cx == home[0]) own = count;
