@@ -46,7 +46,7 @@ void FrameWriter::continue_series(double until_time_s, int frames) {
     char comma;
     in >> row.time_s >> comma >> row.step >> comma >> row.energies.kinetic >> comma >>
         row.energies.potential >> comma >> row.energies.dissipated;
-    if (in && row.time_s < until_time_s) energy_.push_back(row);
+    if (in && row.time_s <= until_time_s) energy_.push_back(row);
   }
 }
 

@@ -22,7 +22,7 @@ ValidationRow make_row(std::string case_name, std::string quantity, double expec
 }
 
 ImpactResult run_normal_impact(const ContactLaw& law, double r1, double r2, double density,
-                               double v0, double dt_s, VelocityInForces velocity) {
+                               double v0, double dt_s, VelocityInForces velocity, double phase) {
   EngineSettings s;
   s.warn_large_overlaps = false;
   s.law = law;
@@ -31,7 +31,8 @@ ImpactResult run_normal_impact(const ContactLaw& law, double r1, double r2, doub
   s.domain.lo = {-1, -1, -1};
   s.domain.hi = {1, 1, 1};
   Particles p;
-  const double gap = 0.05 * r1;  // start just apart: the first contact is inside the skin
+  const double gap =
+      0.05 * r1 + phase * v0 * dt_s;  // just apart: the first touch is inside the skin
   if (r2 > 0) {
     p.add(0, 0, -(r1 + 0.5 * gap), 0, 0, r1, density);
     p.add(1, 0, r2 + 0.5 * gap, 0, 0, r2, density);
@@ -69,6 +70,16 @@ ImpactResult run_normal_impact(const ContactLaw& law, double r1, double r2, doub
   result.restitution = -relative_velocity() / before;
   result.contact_time_s = static_cast<double>(touching_steps) * dt_s;
   return result;
+}
+
+double mean_restitution(const ContactLaw& law, double r1, double r2, double density, double v0,
+                        double dt_s, VelocityInForces velocity, int phases) {
+  double sum = 0.0;
+  for (int k = 0; k < phases; ++k) {
+    sum +=
+        run_normal_impact(law, r1, r2, density, v0, dt_s, velocity, (k + 0.5) / phases).restitution;
+  }
+  return sum / phases;
 }
 
 }  // namespace contactlab::dem
