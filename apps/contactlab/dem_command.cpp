@@ -49,7 +49,10 @@ struct DemRunCommand {
       if (writer) writer->continue_series(engine.time_s(), frame);
     }
     const double dt = settings.dt_s;
-    const auto total_steps = static_cast<std::uint64_t>(std::llround(config.end_time_s / dt));
+    // Steps to the config's end from where the (restarted) run stands; a restart may change dt.
+    const double remaining_s = std::max(0.0, config.end_time_s - engine.time_s());
+    const std::uint64_t total_steps =
+        engine.step_count() + static_cast<std::uint64_t>(std::llround(remaining_s / dt));
     const std::uint64_t every =
         config.output_every_s > 0
             ? std::max<std::uint64_t>(
@@ -66,7 +69,7 @@ struct DemRunCommand {
     try {
       while (engine.step_count() < total_steps) {
         engine.step();
-        if (engine.step_count() % every == 0 || engine.step_count() == total_steps) {
+        if ((engine.step_count() - first_step) % every == 0 || engine.step_count() == total_steps) {
           if (writer) writer->write(engine, frame++);
           if (!checkpoint.empty()) dem::write_checkpoint(engine, frame, checkpoint);
         }

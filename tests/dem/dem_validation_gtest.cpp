@@ -27,14 +27,14 @@ TEST_P(DemValidation, EveryRowPasses) {
 INSTANTIATE_TEST_SUITE_P(Cases, DemValidation,
                          ::testing::Values("normal-impact", "elastic-gas", "momentum",
                                            "resting-column", "oblique-impact", "slide-to-roll",
-                                           "stability"),
+                                           "rolling-resistance", "stability"),
                          [](const auto& param_info) {
                            std::string name = param_info.param;
                            for (char& ch : name) ch = ch == '-' ? '_' : ch;
                            return name;
                          });
 
-TEST(DemValidationCases, AllAreRegistered) { EXPECT_EQ(validation_cases().size(), 7u); }
+TEST(DemValidationCases, AllAreRegistered) { EXPECT_EQ(validation_cases().size(), 8u); }
 
 }  // namespace
 }  // namespace contactlab::dem

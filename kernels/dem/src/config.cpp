@@ -218,6 +218,7 @@ DemConfig parse_dem_config(const json& document) {
     n.finish();
   }
   s.initial_overlap_tolerance = number(o, "initial_overlap_tolerance", 0.01, 0.0, 0.1);
+  s.viscous_damping = number(o, "viscous_damping", 0.0, 0.0, kHuge);
   c.materials = array_of<Material>(o, "materials", [](const JsonIn& in) {
     ObjectIn m(in);
     Material mat{text(m, "name", std::nullopt),

@@ -162,7 +162,8 @@ void Engine::step() {
       bad = std::min(bad, static_cast<std::uint32_t>(k));
     }
   }
-  time_s_ = static_cast<double>(step_ + 1) * dt;
+  // Time from the last (re)start's base: exact multiples of dt, also after a dt change.
+  time_s_ = base_time_s_ + static_cast<double>(step_ + 1 - base_step_) * dt;
   ++step_;
   double t1 = omp_get_wtime();
   phases_.integrate_s += t1 - t0;
@@ -222,8 +223,9 @@ void Engine::compute_forces(bool final_kick) {
       const double rsq = dx * dx + dy * dy + dz * dz;
       if (rsq >= rr * rr) {
         q.hx[k] = q.hy[k] = q.hz[k] = 0.0;
-        q.fx[k] = q.fy[k] = q.fz[k] = q.cx[k] = q.cy[k] = q.cz[k] = 0.0;
-        if (rolling) q.rx[k] = q.ry[k] = q.rz[k] = 0.0;
+        double* out = &q.out[6 * k];
+        out[0] = out[1] = out[2] = out[3] = out[4] = out[5] = 0.0;
+        if (rolling) q.roll[3 * k] = q.roll[3 * k + 1] = q.roll[3 * k + 2] = 0.0;
         q.touching[k] = 0;
         continue;
       }
@@ -247,21 +249,22 @@ void Engine::compute_forces(bool final_kick) {
       const Tangential ft =
           tangential(nx, ny, nz, vx - vn * nx, vy - vn * ny, vz - vn * nz, fn, c.kt_ratio * kn,
                      c.ct_ratio * cn, c.mu, dt, q.hx[k], q.hy[k], q.hz[k]);
-      q.fx[k] = fn * nx + ft.ftx;
-      q.fy[k] = fn * ny + ft.fty;
-      q.fz[k] = fn * nz + ft.ftz;
-      q.cx[k] = ny * ft.ftz - nz * ft.fty;
-      q.cy[k] = nz * ft.ftx - nx * ft.ftz;
-      q.cz[k] = nx * ft.fty - ny * ft.ftx;
+      double* out = &q.out[6 * k];
+      out[0] = fn * nx + ft.ftx;
+      out[1] = fn * ny + ft.fty;
+      out[2] = fn * nz + ft.ftz;
+      out[3] = ny * ft.ftz - nz * ft.fty;
+      out[4] = nz * ft.ftx - nx * ft.ftz;
+      out[5] = nx * ft.fty - ny * ft.ftx;
       q.touching[k] = fn > 0;
       if (rolling) {
         // Constant rolling-resistance torque against the relative rotation (model A).
         const double ox = p.pwx[i] - p.pwx[j], oy = p.pwy[i] - p.pwy[j], oz = p.pwz[i] - p.pwz[j];
         const double om = std::sqrt(ox * ox + oy * oy + oz * oz);
         const double s = om > 0 ? -c.mu_roll * fn * (ri * rj / rr) / om : 0.0;
-        q.rx[k] = s * ox;
-        q.ry[k] = s * oy;
-        q.rz[k] = s * oz;
+        q.roll[3 * k] = s * ox;
+        q.roll[3 * k + 1] = s * oy;
+        q.roll[3 * k + 2] = s * oz;
       }
     }
 #pragma omp single nowait
@@ -276,16 +279,17 @@ void Engine::compute_forces(bool final_kick) {
         const std::uint32_t entry = q.entries[e];
         const std::uint32_t k = entry >> 1;
         const double sign = (entry & 1) ? -1.0 : 1.0;
-        fx += sign * q.fx[k];
-        fy += sign * q.fy[k];
-        fz += sign * q.fz[k];
-        tx -= r * q.cx[k];
-        ty -= r * q.cy[k];
-        tz -= r * q.cz[k];
+        const double* out = &q.out[6 * std::size_t{k}];
+        fx += sign * out[0];
+        fy += sign * out[1];
+        fz += sign * out[2];
+        tx -= r * out[3];
+        ty -= r * out[4];
+        tz -= r * out[5];
         if (rolling) {
-          tx += sign * q.rx[k];
-          ty += sign * q.ry[k];
-          tz += sign * q.rz[k];
+          tx += sign * q.roll[3 * std::size_t{k}];
+          ty += sign * q.roll[3 * std::size_t{k} + 1];
+          tz += sign * q.roll[3 * std::size_t{k} + 2];
         }
         touching += q.touching[k];
       }
@@ -338,6 +342,10 @@ void Engine::compute_forces(bool final_kick) {
       p.contacts[a] = static_cast<std::uint16_t>(touching);
       p.force_magnitude[a] = std::sqrt(fx * fx + fy * fy + fz * fz);
       const double mass = p.mass[a];
+      // Optional background drag (settling only): F = -c v with the synchronised velocity.
+      fx -= settings_.viscous_damping * p.pvx[a];
+      fy -= settings_.viscous_damping * p.pvy[a];
+      fz -= settings_.viscous_damping * p.pvz[a];
       fx += mass * settings_.gravity[0];
       fy += mass * settings_.gravity[1];
       fz += mass * settings_.gravity[2];
@@ -416,6 +424,8 @@ Energies Engine::energies() const {
 
 void Engine::restore(const State& state, Particles particles, PairList pairs) {
   time_s_ = state.time_s;
+  base_time_s_ = state.time_s;
+  base_step_ = state.step;
   step_ = state.step;
   rebuilds_ = state.rebuilds;
   large_overlaps_ = state.large_overlaps;

@@ -16,8 +16,9 @@ void PairList::resize(std::size_t n, bool rolling) {
   j.resize(n);
   image.resize(n);
   touching.resize(n);
-  for (auto* v : {&hx, &hy, &hz, &fx, &fy, &fz, &cx, &cy, &cz}) v->resize(n);
-  for (auto* v : {&rx, &ry, &rz}) v->resize(rolling ? n : 0);
+  for (auto* v : {&hx, &hy, &hz}) v->resize(n);
+  out.resize(6 * n);
+  roll.resize(rolling ? 3 * n : 0);
 }
 
 void PairList::build_csr(std::size_t particles) {

@@ -278,6 +278,34 @@ std::vector<ValidationRow> slide_to_roll() {
                    engine.particles().vx[0] / v0, 0.01, true, "rolls at 5/7 v0")};
 }
 
+// Rolling resistance (constant torque mu_r R F_n against the rotation): a sphere rolling on a
+// plane decelerates at a = 5/7 mu_r g (m a = -f, I a / R = f R - mu_r R m g).
+std::vector<ValidationRow> rolling_resistance() {
+  EngineSettings s;
+  s.law = impact_law(0.5, true);
+  s.law.friction = 0.5;
+  s.law.rolling_friction = 0.1;
+  s.gravity = {0, 0, -9.81};
+  s.dt_s = kTc / 50;
+  s.domain.lo = {-1, -1, -1};
+  s.domain.hi = {1, 1, 1};
+  Wall floor;
+  floor.name = "floor";
+  s.walls.push_back(floor);
+  Particles p;
+  p.add(0, 0, 0, 0, kRadius, kRadius, kDensity);
+  p.z[0] = p.z0[0] = kRadius - 9.81 / pair_coefficients(s.law).k_per_mass;
+  const double v0 = 0.05;
+  p.vx[0] = v0;
+  p.wy[0] = v0 / kRadius;  // rolling without slip
+  Engine engine(s, std::move(p));
+  const double t = 0.02;  // s, before it stops (at v0 / a = 0.073 s)
+  engine.run_steps(static_cast<std::uint64_t>(std::llround(t / s.dt_s)));
+  return {make_row("rolling resistance mu_r=0.1, sphere rolling at 0.05 m/s",
+                   "speed after 0.02 s [m/s]", v0 - 5.0 / 7.0 * 0.1 * 9.81 * t,
+                   engine.particles().vx[0], 0.01, true, "v0 - 5/7 mu_r g t")};
+}
+
 // Refusals and run-time stops.
 std::vector<ValidationRow> stability_checks() {
   std::vector<ValidationRow> rows;
@@ -361,6 +389,7 @@ const std::vector<ValidationCase>& validation_cases() {
       {"resting-column", "bottom overlap of a resting column; no creep", resting_column},
       {"oblique-impact", "Chung & Ooi test 4", oblique_impacts},
       {"slide-to-roll", "a sliding sphere ends rolling at 5/7 v0", slide_to_roll},
+      {"rolling-resistance", "deceleration of a rolling sphere by mu_r", rolling_resistance},
       {"stability", "dt limit, overlap, move and NaN checks", stability_checks},
   };
   return cases;

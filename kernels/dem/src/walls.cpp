@@ -32,6 +32,10 @@ bool closest_point(const Wall& wall, double t_s, const Vec3& c, Vec3& out) {
   const Vec3& a = wall.normal;
   const Vec3 r{c[0] - p[0], c[1] - p[1], c[2] - p[2]};
   const double along = dot(r, a);
+  if (wall.kind == WallKind::kPlane) {  // the common case: no radial direction needed
+    out = {c[0] - along * a[0], c[1] - along * a[1], c[2] - along * a[2]};
+    return true;
+  }
   const Vec3 radial{r[0] - along * a[0], r[1] - along * a[1], r[2] - along * a[2]};
   const double rho = std::sqrt(dot(radial, radial));
   // A unit radial direction (any one on the axis itself).
@@ -47,8 +51,7 @@ bool closest_point(const Wall& wall, double t_s, const Vec3& c, Vec3& out) {
   }
   switch (wall.kind) {
     case WallKind::kPlane:
-      out = {c[0] - along * a[0], c[1] - along * a[1], c[2] - along * a[2]};
-      return true;
+      return true;  // handled above
     case WallKind::kCylinder: {
       if (along < wall.axial_min || along > wall.axial_max) return false;
       for (int k = 0; k < 3; ++k) out[k] = p[k] + along * a[k] + wall.radius * u[k];

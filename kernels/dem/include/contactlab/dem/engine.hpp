@@ -32,7 +32,10 @@ struct EngineSettings {
   // Initial overlaps above this fraction of the smaller diameter are refused (InputError).
   double initial_overlap_tolerance = 0.01;
   int threads = 1;
-  bool warn_large_overlaps = true;  // the one warning per run on stderr
+  bool warn_large_overlaps = true;
+  // Background drag F = -c v [kg/s] on every particle; 0 = off. For settling beds only (it
+  // breaks the energy balance: its work counts as dissipated).
+  double viscous_damping = 0.0;  // the one warning per run on stderr
 };
 
 // Phase times of step() [s], summed since construction.
@@ -109,6 +112,8 @@ class Engine {
   std::uint64_t step_ = 0, rebuilds_ = 0, large_overlaps_ = 0;
   bool warned_ = false;
   double stable_dt_ = 0.0, initial_energy_ = 0.0;
+  double base_time_s_ = 0.0;  // time and step of the last restore: t = base + (step - base) dt
+  std::uint64_t base_step_ = 0;
   PhaseTimes phases_;
 };
 

@@ -28,9 +28,11 @@ struct PairList {
   std::vector<std::uint32_t> i, j;  // particle indices (current order)
   std::vector<std::uint8_t> image;  // periodic image code of j
   std::vector<double> hx, hy, hz;   // tangential spring xi [m], oriented as seen from i
-  // The per-pair buffer written by the force loop (each slot by one thread): force on i [N]
-  // (j gets minus it), n x F_t [N] (torques -r_i and -r_j times it), rolling torque on i [N m].
-  std::vector<double> fx, fy, fz, cx, cy, cz, rx, ry, rz;
+  // The per-pair buffer written by the force loop (each slot by one thread), 6 doubles a pair
+  // side by side so the gather reads one cache line per pair: force on i [N] (j gets minus it)
+  // and n x F_t [N] (torques -r_i and -r_j times it). `roll`: rolling torque on i [N m], 3 a
+  // pair, only with rolling resistance.
+  std::vector<double> out, roll;
   std::vector<std::uint8_t> touching;  // normal force > 0
   // Per-particle CSR of the pairs it belongs to, in pair order: entry k << 1 | (1 if it is j).
   std::vector<std::uint32_t> offsets, entries;
