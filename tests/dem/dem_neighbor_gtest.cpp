@@ -59,13 +59,20 @@ TEST(DemNeighborList, EqualsBruteForceWithPeriodicImages) {
   for (std::size_t k = 1; k < particles.size(); ++k)
     descents += particles.z[k] + 3e-3 < particles.z[k - 1];
   EXPECT_EQ(descents, 0u);
-  // Each particle's CSR lists exactly its pairs.
+  // Rows hold each particle's pairs as i; the j lists hold the others: every pair once each.
+  std::vector<int> seen_i(pairs.size(), 0), seen_j(pairs.size(), 0);
   for (std::size_t a = 0; a < particles.size(); ++a) {
-    for (std::uint32_t e = pairs.offsets[a]; e < pairs.offsets[a + 1]; ++e) {
-      const std::uint32_t k = pairs.entries[e] >> 1;
-      EXPECT_EQ((pairs.entries[e] & 1) ? pairs.j[k] : pairs.i[k], a);
+    for (std::uint32_t k = pairs.rows[a]; k < pairs.rows[a + 1]; ++k) {
+      EXPECT_EQ(pairs.i[k], a);
+      ++seen_i[k];
+    }
+    for (std::uint32_t e = pairs.j_offsets[a]; e < pairs.j_offsets[a + 1]; ++e) {
+      EXPECT_EQ(pairs.j[pairs.j_pairs[e]], a);
+      ++seen_j[pairs.j_pairs[e]];
     }
   }
+  EXPECT_EQ(std::count(seen_i.begin(), seen_i.end(), 1), static_cast<long>(pairs.size()));
+  EXPECT_EQ(std::count(seen_j.begin(), seen_j.end(), 1), static_cast<long>(pairs.size()));
 }
 
 TEST(DemNeighborList, RadixSortSortsStably) {

@@ -14,6 +14,9 @@
 namespace contactlab::dem {
 namespace {
 
+// Overlap thresholds, as fractions of the smaller radius: 1 % and 10 % of the diameter.
+constexpr double kWarnFraction = 0.02, kFailFraction = 0.2;
+
 // The tangential part of the law for one contact (pair or wall), LAMMPS gran/hooke/history
 // with the stored spring projected first: xi <- xi - (xi.n) n; xi += v_t dt; F_t = -k_t xi -
 // c_t v_t; at |F_t| > mu F_n: F_t scaled to mu F_n and xi = -(F_t + c_t v_t) / k_t.
@@ -42,6 +45,107 @@ inline Tangential tangential(double nx, double ny, double nz, double vtx, double
     hz = -(ftz + ct * vtz) * inv_kt;
   }
   return {ftx, fty, ftz};
+}
+
+// The pair loop: rows of the half list (each by one thread), i's sums in registers into
+// row_sum, the j side into the pair's slot. Orphaned `omp for`: called inside the parallel
+// region. Overlap counts are combined exactly (integers), so the result is deterministic.
+template <bool kRolling, bool kClamp>
+void pair_rows(Particles& p, PairList& q, const PairCoefficients& c, double dt,
+               std::vector<double>& row_sum, std::uint64_t& large, std::uint32_t& bad_pair) {
+  const std::size_t n = p.size();
+  std::uint64_t large_here = 0;
+  std::uint32_t bad_here = UINT32_MAX;
+  // Pair forces, row by row (the pairs of particle i, in list order): i's sums stay in
+  // registers and go to row_sum_; each pair's j-side slot and spring are written by the
+  // thread of its row only.
+#pragma omp for schedule(static)
+  for (std::size_t i = 0; i < n; ++i) {
+    double fx = 0, fy = 0, fz = 0, tx = 0, ty = 0, tz = 0;
+    unsigned touching = 0;
+    const double xi = p.x[i], yi = p.y[i], zi = p.z[i], ri = p.radius[i], mi = p.mass[i];
+    const double pvxi = p.pvx[i], pvyi = p.pvy[i], pvzi = p.pvz[i];
+    const double pwxi = p.pwx[i], pwyi = p.pwy[i], pwzi = p.pwz[i];
+    for (std::uint32_t k = q.rows[i]; k < q.rows[i + 1]; ++k) {
+      const std::uint32_t j = q.j[k];
+      const auto& sh = q.shift[q.image[k]];
+      const double dx = xi - p.x[j] - sh[0], dy = yi - p.y[j] - sh[1], dz = zi - p.z[j] - sh[2];
+      const double rj = p.radius[j], rr = ri + rj;
+      const double rsq = dx * dx + dy * dy + dz * dz;
+      double* out = &q.out[6 * std::size_t{k}];
+      if (rsq >= rr * rr) {
+        q.hx[k] = q.hy[k] = q.hz[k] = 0.0;
+        out[0] = out[1] = out[2] = out[3] = out[4] = out[5] = 0.0;
+        if constexpr (kRolling) q.roll[3 * k] = q.roll[3 * k + 1] = q.roll[3 * k + 2] = 0.0;
+        continue;
+      }
+      const double dist = std::sqrt(rsq), inv = 1.0 / dist;
+      const double nx = dx * inv, ny = dy * inv, nz = dz * inv;
+      const double delta = rr - dist;
+      const double r_min = std::min(ri, rj);
+      large_here += delta > kWarnFraction * r_min;
+      if (delta > kFailFraction * r_min) bad_here = std::min(bad_here, k);
+      const double mj = p.mass[j];
+      const double m_star = mi * mj / (mi + mj);
+      // Relative velocity of the contact point: v_i - v_j - (r_i w_i + r_j w_j) x n.
+      const double sx = ri * pwxi + rj * p.pwx[j], sy = ri * pwyi + rj * p.pwy[j],
+                   sz = ri * pwzi + rj * p.pwz[j];
+      const double vx = pvxi - p.pvx[j] - (sy * nz - sz * ny);
+      const double vy = pvyi - p.pvy[j] - (sz * nx - sx * nz);
+      const double vz = pvzi - p.pvz[j] - (sx * ny - sy * nx);
+      const double vn = vx * nx + vy * ny + vz * nz;
+      const double kn = c.k_abs + c.k_per_mass * m_star, cn = c.c_per_mass * m_star;
+      double fn = kn * delta - cn * vn;
+      if constexpr (kClamp) fn = std::max(fn, 0.0);
+      const Tangential ft =
+          tangential(nx, ny, nz, vx - vn * nx, vy - vn * ny, vz - vn * nz, fn, c.kt_ratio * kn,
+                     c.ct_ratio * cn, c.mu, dt, q.hx[k], q.hy[k], q.hz[k]);
+      const double fpx = fn * nx + ft.ftx, fpy = fn * ny + ft.fty, fpz = fn * nz + ft.ftz;
+      const double cx = ny * ft.ftz - nz * ft.fty, cy = nz * ft.ftx - nx * ft.ftz,
+                   cz = nx * ft.fty - ny * ft.ftx;
+      out[0] = fpx;
+      out[1] = fpy;
+      out[2] = fpz;
+      out[3] = cx;
+      out[4] = cy;
+      out[5] = cz;
+      fx += fpx;
+      fy += fpy;
+      fz += fpz;
+      tx -= ri * cx;
+      ty -= ri * cy;
+      tz -= ri * cz;
+      touching += (fpx != 0.0) | (fpy != 0.0) | (fpz != 0.0);
+      if constexpr (kRolling) {
+        // Constant rolling-resistance torque against the relative rotation (model A).
+        const double ox = pwxi - p.pwx[j], oy = pwyi - p.pwy[j], oz = pwzi - p.pwz[j];
+        const double om = std::sqrt(ox * ox + oy * oy + oz * oz);
+        const double s = om > 0 ? -c.mu_roll * fn * (ri * rj / rr) / om : 0.0;
+        q.roll[3 * k] = s * ox;
+        q.roll[3 * k + 1] = s * oy;
+        q.roll[3 * k + 2] = s * oz;
+        tx += s * ox;
+        ty += s * oy;
+        tz += s * oz;
+      }
+    }
+    double* sum = &row_sum[7 * i];
+    sum[0] = fx;
+    sum[1] = fy;
+    sum[2] = fz;
+    sum[3] = tx;
+    sum[4] = ty;
+    sum[5] = tz;
+    sum[6] = touching;
+  }
+  if (large_here > 0) {
+#pragma omp atomic
+    large += large_here;
+  }
+  if (bad_here != UINT32_MAX) {
+#pragma omp critical(dem_bad_pair)
+    bad_pair = std::min(bad_pair, bad_here);
+  }
 }
 
 }  // namespace
@@ -197,109 +301,90 @@ void Engine::compute_forces(bool final_kick) {
   Particles& p = particles_;
   PairList& q = pairs_;
   const PairCoefficients& c = coefficients_;
-  const std::size_t n = p.size(), m = q.size();
+  const std::size_t n = p.size();
   const double dt = settings_.dt_s, half = 0.5 * dt;
   const bool rolling = c.mu_roll > 0;
-  const double warn_frac = 0.02, fail_frac = 0.2;  // of the smaller radius: 1 % / 10 % of d
-  std::uint64_t large = 0;
+  std::uint64_t large = 0, large_pairs = 0;  // the pair loop adds atomically, the gather reduces
   std::uint32_t bad_pair = UINT32_MAX, bad_wall_particle = UINT32_MAX;
+  row_sum_.resize(7 * n);
+  const std::size_t j_total = q.j_pairs.size();
+  constexpr std::size_t kPrefetchAhead = 16;
   const double t0 = omp_get_wtime();
   double t_pairs = 0.0;
   const std::size_t wall_count = settings_.walls.size();
-  std::vector<Vec3> wall_offset(wall_count), wall_velocity(wall_count);
+  std::vector<Vec3> wall_point(wall_count), wall_velocity(wall_count);
+  std::vector<std::uint8_t> wall_plane(wall_count), wall_active(wall_count);
   for (std::size_t w = 0; w < wall_count; ++w) {
-    wall_velocity[w] = settings_.walls[w].velocity_at(time_s_);
+    const Wall& wall = settings_.walls[w];
+    wall_velocity[w] = wall.velocity_at(time_s_);
+    const Vec3 shift = wall.offset(time_s_);
+    for (int k = 0; k < 3; ++k) wall_point[w][k] = wall.point[k] + shift[k];
+    wall_plane[w] = wall.kind == WallKind::kPlane;
+    wall_active[w] = wall.active(time_s_);
   }
 #pragma omp parallel num_threads(settings_.threads)
   {
-    // Pair forces: each pair's slot (force, torque factor, spring) is written by one thread.
-#pragma omp for schedule(static) reduction(+ : large) reduction(min : bad_pair)
-    for (std::size_t k = 0; k < m; ++k) {
-      const std::uint32_t i = q.i[k], j = q.j[k];
-      const auto& sh = q.shift[q.image[k]];
-      const double dx = p.x[i] - p.x[j] - sh[0], dy = p.y[i] - p.y[j] - sh[1],
-                   dz = p.z[i] - p.z[j] - sh[2];
-      const double ri = p.radius[i], rj = p.radius[j], rr = ri + rj;
-      const double rsq = dx * dx + dy * dy + dz * dz;
-      if (rsq >= rr * rr) {
-        q.hx[k] = q.hy[k] = q.hz[k] = 0.0;
-        double* out = &q.out[6 * k];
-        out[0] = out[1] = out[2] = out[3] = out[4] = out[5] = 0.0;
-        if (rolling) q.roll[3 * k] = q.roll[3 * k + 1] = q.roll[3 * k + 2] = 0.0;
-        q.touching[k] = 0;
-        continue;
-      }
-      const double dist = std::sqrt(rsq), inv = 1.0 / dist;
-      const double nx = dx * inv, ny = dy * inv, nz = dz * inv;
-      const double delta = rr - dist;
-      const double r_min = std::min(ri, rj);
-      large += delta > warn_frac * r_min;
-      if (delta > fail_frac * r_min) bad_pair = std::min(bad_pair, static_cast<std::uint32_t>(k));
-      const double m_star = p.mass[i] * p.mass[j] / (p.mass[i] + p.mass[j]);
-      // Relative velocity of the contact point: v_i - v_j - (r_i w_i + r_j w_j) x n.
-      const double sx = ri * p.pwx[i] + rj * p.pwx[j], sy = ri * p.pwy[i] + rj * p.pwy[j],
-                   sz = ri * p.pwz[i] + rj * p.pwz[j];
-      const double vx = p.pvx[i] - p.pvx[j] - (sy * nz - sz * ny);
-      const double vy = p.pvy[i] - p.pvy[j] - (sz * nx - sx * nz);
-      const double vz = p.pvz[i] - p.pvz[j] - (sx * ny - sy * nx);
-      const double vn = vx * nx + vy * ny + vz * nz;
-      const double kn = c.k_abs + c.k_per_mass * m_star, cn = c.c_per_mass * m_star;
-      double fn = kn * delta - cn * vn;
-      if (c.clamp) fn = std::max(fn, 0.0);
-      const Tangential ft =
-          tangential(nx, ny, nz, vx - vn * nx, vy - vn * ny, vz - vn * nz, fn, c.kt_ratio * kn,
-                     c.ct_ratio * cn, c.mu, dt, q.hx[k], q.hy[k], q.hz[k]);
-      double* out = &q.out[6 * k];
-      out[0] = fn * nx + ft.ftx;
-      out[1] = fn * ny + ft.fty;
-      out[2] = fn * nz + ft.ftz;
-      out[3] = ny * ft.ftz - nz * ft.fty;
-      out[4] = nz * ft.ftx - nx * ft.ftz;
-      out[5] = nx * ft.fty - ny * ft.ftx;
-      q.touching[k] = fn > 0;
-      if (rolling) {
-        // Constant rolling-resistance torque against the relative rotation (model A).
-        const double ox = p.pwx[i] - p.pwx[j], oy = p.pwy[i] - p.pwy[j], oz = p.pwz[i] - p.pwz[j];
-        const double om = std::sqrt(ox * ox + oy * oy + oz * oz);
-        const double s = om > 0 ? -c.mu_roll * fn * (ri * rj / rr) / om : 0.0;
-        q.roll[3 * k] = s * ox;
-        q.roll[3 * k + 1] = s * oy;
-        q.roll[3 * k + 2] = s * oz;
-      }
+    // Pair forces, row by row; the law's switches chosen at compile time.
+    if (rolling) {
+      c.clamp ? pair_rows<true, true>(p, q, c, dt, row_sum_, large_pairs, bad_pair)
+              : pair_rows<true, false>(p, q, c, dt, row_sum_, large_pairs, bad_pair);
+    } else {
+      c.clamp ? pair_rows<false, true>(p, q, c, dt, row_sum_, large_pairs, bad_pair)
+              : pair_rows<false, false>(p, q, c, dt, row_sum_, large_pairs, bad_pair);
     }
 #pragma omp single nowait
     t_pairs = omp_get_wtime();
-    // Gather in CSR order (fixed: bit-identical for any thread count), walls, gravity, kick.
+    // Gather (own row's sum, then the pairs where the particle is j, in pair order: fixed, so
+    // bit-identical for any thread count), walls, gravity, kick.
 #pragma omp for schedule(static) reduction(+ : large) reduction(min : bad_wall_particle)
     for (std::size_t a = 0; a < n; ++a) {
-      double fx = 0, fy = 0, fz = 0, tx = 0, ty = 0, tz = 0;
+      const double* sum = &row_sum_[7 * a];
+      double fx = sum[0], fy = sum[1], fz = sum[2], tx = sum[3], ty = sum[4], tz = sum[5];
       const double r = p.radius[a];
-      unsigned touching = 0;
-      for (std::uint32_t e = q.offsets[a]; e < q.offsets[a + 1]; ++e) {
-        const std::uint32_t entry = q.entries[e];
-        const std::uint32_t k = entry >> 1;
-        const double sign = (entry & 1) ? -1.0 : 1.0;
-        const double* out = &q.out[6 * std::size_t{k}];
-        fx += sign * out[0];
-        fy += sign * out[1];
-        fz += sign * out[2];
+      unsigned touching = static_cast<unsigned>(sum[6]);
+      const std::uint32_t e_end = q.j_offsets[a + 1];
+      for (std::uint32_t e = q.j_offsets[a]; e < e_end; ++e) {
+        const std::size_t k = q.j_pairs[e];
+        // The j-side slots were written by rows up to a layer of cells back (an L2 miss each):
+        // fetch those of the particles a few ahead.
+        if (e + kPrefetchAhead < j_total) {
+          __builtin_prefetch(&q.out[6 * std::size_t{q.j_pairs[e + kPrefetchAhead]}]);
+        }
+        const double* out = &q.out[6 * k];
+        fx -= out[0];
+        fy -= out[1];
+        fz -= out[2];
         tx -= r * out[3];
         ty -= r * out[4];
         tz -= r * out[5];
         if (rolling) {
-          tx += sign * q.roll[3 * std::size_t{k}];
-          ty += sign * q.roll[3 * std::size_t{k} + 1];
-          tz += sign * q.roll[3 * std::size_t{k} + 2];
+          tx -= q.roll[3 * k];
+          ty -= q.roll[3 * k + 1];
+          tz -= q.roll[3 * k + 2];
         }
-        touching += q.touching[k];
+        touching += (out[0] != 0.0) | (out[1] != 0.0) | (out[2] != 0.0);  // a non-zero force
       }
       for (std::size_t w = 0; w < wall_count; ++w) {
         double* hx = &p.wall_spring[3 * w][a];
         double* hy = &p.wall_spring[3 * w + 1][a];
         double* hz = &p.wall_spring[3 * w + 2][a];
-        Vec3 cp;
-        const bool any = closest_point(settings_.walls[w], time_s_, {p.x[a], p.y[a], p.z[a]}, cp);
-        const double dx = p.x[a] - cp[0], dy = p.y[a] - cp[1], dz = p.z[a] - cp[2];
+        double dx, dy, dz;
+        bool any = wall_active[w];
+        if (wall_plane[w]) {  // inline: the distance along the normal, no closest point
+          const Vec3& o = wall_point[w];
+          const Vec3& nn = settings_.walls[w].normal;
+          const double along =
+              (p.x[a] - o[0]) * nn[0] + (p.y[a] - o[1]) * nn[1] + (p.z[a] - o[2]) * nn[2];
+          dx = along * nn[0];
+          dy = along * nn[1];
+          dz = along * nn[2];
+        } else {
+          Vec3 cp{};
+          any = closest_point(settings_.walls[w], time_s_, {p.x[a], p.y[a], p.z[a]}, cp);
+          dx = p.x[a] - cp[0];
+          dy = p.y[a] - cp[1];
+          dz = p.z[a] - cp[2];
+        }
         const double rsq = dx * dx + dy * dy + dz * dz;
         if (!any || rsq >= r * r || rsq == 0.0) {
           *hx = *hy = *hz = 0.0;
@@ -308,8 +393,8 @@ void Engine::compute_forces(bool final_kick) {
         const double dist = std::sqrt(rsq), inv = 1.0 / dist;
         const double nx = dx * inv, ny = dy * inv, nz = dz * inv;
         const double delta = r - dist;
-        large += delta > warn_frac * r;
-        if (delta > fail_frac * r)
+        large += delta > kWarnFraction * r;
+        if (delta > kFailFraction * r)
           bad_wall_particle = std::min(bad_wall_particle, std::uint32_t(a));
         const double m_star = p.mass[a];
         const Vec3& wv = wall_velocity[w];
@@ -372,6 +457,7 @@ void Engine::compute_forces(bool final_kick) {
   if (bad_wall_particle != UINT32_MAX) {
     fail("overlap with a wall above 10 % of the diameter", bad_wall_particle);
   }
+  large += large_pairs;
   large_overlaps_ += large;
   if (large > 0 && !warned_ && settings_.warn_large_overlaps) {
     warned_ = true;

@@ -15,25 +15,26 @@ void PairList::resize(std::size_t n, bool rolling) {
   i.resize(n);
   j.resize(n);
   image.resize(n);
-  touching.resize(n);
   for (auto* v : {&hx, &hy, &hz}) v->resize(n);
   out.resize(6 * n);
   roll.resize(rolling ? 3 * n : 0);
 }
 
 void PairList::build_csr(std::size_t particles) {
-  offsets.assign(particles + 1, 0);
+  // Rows: the list is built (and saved) grouped by i in ascending order.
+  rows.assign(particles + 1, 0);
   for (std::size_t k = 0; k < size(); ++k) {
-    ++offsets[i[k] + 1];
-    ++offsets[j[k] + 1];
+    if (k > 0 && i[k] < i[k - 1]) throw InputError("DEM pair list is not grouped by particle");
+    ++rows[i[k] + 1];
   }
-  for (std::size_t p = 0; p < particles; ++p) offsets[p + 1] += offsets[p];
-  entries.resize(offsets[particles]);
-  std::vector<std::uint32_t> next(offsets.begin(), offsets.end() - 1);
-  for (std::size_t k = 0; k < size(); ++k) {
-    entries[next[i[k]]++] = static_cast<std::uint32_t>(k << 1);
-    entries[next[j[k]]++] = static_cast<std::uint32_t>(k << 1 | 1);
-  }
+  for (std::size_t p = 0; p < particles; ++p) rows[p + 1] += rows[p];
+  // The pairs each particle is the j of, in pair order.
+  j_offsets.assign(particles + 1, 0);
+  for (std::size_t k = 0; k < size(); ++k) ++j_offsets[j[k] + 1];
+  for (std::size_t p = 0; p < particles; ++p) j_offsets[p + 1] += j_offsets[p];
+  j_pairs.resize(j_offsets[particles]);
+  std::vector<std::uint32_t> next(j_offsets.begin(), j_offsets.end() - 1);
+  for (std::size_t k = 0; k < size(); ++k) j_pairs[next[j[k]]++] = static_cast<std::uint32_t>(k);
 }
 
 void radix_sort(std::vector<std::uint64_t>& keys, std::vector<std::uint32_t>& payload, int bits,
@@ -206,7 +207,6 @@ RebuildStats NeighborBuilder::rebuild(Particles& p, PairList& pairs, const Domai
   std::fill(pairs.hx.begin(), pairs.hx.end(), 0.0);
   std::fill(pairs.hy.begin(), pairs.hy.end(), 0.0);
   std::fill(pairs.hz.begin(), pairs.hz.end(), 0.0);
-  std::fill(pairs.touching.begin(), pairs.touching.end(), 0);
   stats.pairs = count;
 
   // 5. Merge the old springs into the new list by sorted keys: O(pairs) radix sorts.

@@ -205,7 +205,7 @@ std::vector<ValidationRow> oblique_impacts() {
   const double sliding = 3.5 * mu * (1 + e), sticking = 3.5 * mu;
   for (const double angle_deg : {5.0, 10.0, 15.0, 20.0, 30.0, 40.0, 50.0, 60.0, 70.0, 80.0, 85.0}) {
     EngineSettings s;
-  s.warn_large_overlaps = false;  // the table is the output
+    s.warn_large_overlaps = false;  // the table is the output
     s.law = impact_law(e, true);
     s.law.contact_time_s = tc;
     s.law.friction = mu;

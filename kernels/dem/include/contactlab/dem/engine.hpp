@@ -115,6 +115,7 @@ class Engine {
   double base_time_s_ = 0.0;  // time and step of the last restore: t = base + (step - base) dt
   std::uint64_t base_step_ = 0;
   PhaseTimes phases_;
+  std::vector<double> row_sum_;  // per particle: its own row's force, torque, touching count
 };
 
 }  // namespace contactlab::dem

@@ -28,14 +28,14 @@ struct PairList {
   std::vector<std::uint32_t> i, j;  // particle indices (current order)
   std::vector<std::uint8_t> image;  // periodic image code of j
   std::vector<double> hx, hy, hz;   // tangential spring xi [m], oriented as seen from i
-  // The per-pair buffer written by the force loop (each slot by one thread), 6 doubles a pair
-  // side by side so the gather reads one cache line per pair: force on i [N] (j gets minus it)
-  // and n x F_t [N] (torques -r_i and -r_j times it). `roll`: rolling torque on i [N m], 3 a
-  // pair, only with rolling resistance.
+  // The per-pair buffer for the j side, written by the force loop (each slot by the thread of
+  // the pair's row), 6 doubles a pair side by side so the gather reads one cache line: force on
+  // i [N] (j gets minus it) and n x F_t [N] (j's torque is -r_j times it). `roll`: rolling
+  // torque on i [N m] (j gets minus it), 3 a pair, only with rolling resistance.
   std::vector<double> out, roll;
-  std::vector<std::uint8_t> touching;  // normal force > 0
-  // Per-particle CSR of the pairs it belongs to, in pair order: entry k << 1 | (1 if it is j).
-  std::vector<std::uint32_t> offsets, entries;
+  // Pairs are grouped by i, ascending: particle a's own pairs are [rows[a], rows[a + 1]).
+  // The pairs where a is the j: j_pairs[j_offsets[a] .. j_offsets[a + 1]), in pair order.
+  std::vector<std::uint32_t> rows, j_offsets, j_pairs;
   std::array<std::array<double, 3>, 27> shift{};  // image code -> shift [m]
 
   std::size_t size() const { return i.size(); }
