@@ -17,6 +17,10 @@ namespace {
 // Overlap thresholds, as fractions of the smaller radius: 1 % and 10 % of the diameter.
 constexpr double kWarnFraction = 0.02, kFailFraction = 0.2;
 
+// What the pair loop reads of a particle, side by side (one or two cache lines per partner
+// instead of one per array): x, y, z, r, pvx, pvy, pvz, m, pwx, pwy, pwz, unused.
+constexpr std::size_t kKinStride = 12;
+
 // The tangential part of the law for one contact (pair or wall), LAMMPS gran/hooke/history
 // with the stored spring projected first: xi <- xi - (xi.n) n; xi += v_t dt; F_t = -k_t xi -
 // c_t v_t; at |F_t| > mu F_n: F_t scaled to mu F_n and xi = -(F_t + c_t v_t) / k_t.
@@ -51,9 +55,8 @@ inline Tangential tangential(double nx, double ny, double nz, double vtx, double
 // row_sum, the j side into the pair's slot. Orphaned `omp for`: called inside the parallel
 // region. Overlap counts are combined exactly (integers), so the result is deterministic.
 template <bool kRolling, bool kClamp>
-void pair_rows(Particles& p, PairList& q, const PairCoefficients& c, double dt,
+void pair_rows(const double* kin, std::size_t n, PairList& q, const PairCoefficients& c, double dt,
                std::vector<double>& row_sum, std::uint64_t& large, std::uint32_t& bad_pair) {
-  const std::size_t n = p.size();
   std::uint64_t large_here = 0;
   std::uint32_t bad_here = UINT32_MAX;
   // Pair forces, row by row (the pairs of particle i, in list order): i's sums stay in
@@ -63,14 +66,15 @@ void pair_rows(Particles& p, PairList& q, const PairCoefficients& c, double dt,
   for (std::size_t i = 0; i < n; ++i) {
     double fx = 0, fy = 0, fz = 0, tx = 0, ty = 0, tz = 0;
     unsigned touching = 0;
-    const double xi = p.x[i], yi = p.y[i], zi = p.z[i], ri = p.radius[i], mi = p.mass[i];
-    const double pvxi = p.pvx[i], pvyi = p.pvy[i], pvzi = p.pvz[i];
-    const double pwxi = p.pwx[i], pwyi = p.pwy[i], pwzi = p.pwz[i];
+    const double* ki = &kin[kKinStride * i];
+    const double xi = ki[0], yi = ki[1], zi = ki[2], ri = ki[3], mi = ki[7];
+    const double pvxi = ki[4], pvyi = ki[5], pvzi = ki[6];
+    const double pwxi = ki[8], pwyi = ki[9], pwzi = ki[10];
     for (std::uint32_t k = q.rows[i]; k < q.rows[i + 1]; ++k) {
-      const std::uint32_t j = q.j[k];
+      const double* kj = &kin[kKinStride * q.j[k]];
       const auto& sh = q.shift[q.image[k]];
-      const double dx = xi - p.x[j] - sh[0], dy = yi - p.y[j] - sh[1], dz = zi - p.z[j] - sh[2];
-      const double rj = p.radius[j], rr = ri + rj;
+      const double dx = xi - kj[0] - sh[0], dy = yi - kj[1] - sh[1], dz = zi - kj[2] - sh[2];
+      const double rj = kj[3], rr = ri + rj;
       const double rsq = dx * dx + dy * dy + dz * dz;
       double* out = &q.out[6 * std::size_t{k}];
       if (rsq >= rr * rr) {
@@ -85,14 +89,14 @@ void pair_rows(Particles& p, PairList& q, const PairCoefficients& c, double dt,
       const double r_min = std::min(ri, rj);
       large_here += delta > kWarnFraction * r_min;
       if (delta > kFailFraction * r_min) bad_here = std::min(bad_here, k);
-      const double mj = p.mass[j];
+      const double mj = kj[7];
       const double m_star = mi * mj / (mi + mj);
       // Relative velocity of the contact point: v_i - v_j - (r_i w_i + r_j w_j) x n.
-      const double sx = ri * pwxi + rj * p.pwx[j], sy = ri * pwyi + rj * p.pwy[j],
-                   sz = ri * pwzi + rj * p.pwz[j];
-      const double vx = pvxi - p.pvx[j] - (sy * nz - sz * ny);
-      const double vy = pvyi - p.pvy[j] - (sz * nx - sx * nz);
-      const double vz = pvzi - p.pvz[j] - (sx * ny - sy * nx);
+      const double sx = ri * pwxi + rj * kj[8], sy = ri * pwyi + rj * kj[9],
+                   sz = ri * pwzi + rj * kj[10];
+      const double vx = pvxi - kj[4] - (sy * nz - sz * ny);
+      const double vy = pvyi - kj[5] - (sz * nx - sx * nz);
+      const double vz = pvzi - kj[6] - (sx * ny - sy * nx);
       const double vn = vx * nx + vy * ny + vz * nz;
       const double kn = c.k_abs + c.k_per_mass * m_star, cn = c.c_per_mass * m_star;
       double fn = kn * delta - cn * vn;
@@ -118,7 +122,7 @@ void pair_rows(Particles& p, PairList& q, const PairCoefficients& c, double dt,
       touching += (fpx != 0.0) | (fpy != 0.0) | (fpz != 0.0);
       if constexpr (kRolling) {
         // Constant rolling-resistance torque against the relative rotation (model A).
-        const double ox = pwxi - p.pwx[j], oy = pwyi - p.pwy[j], oz = pwzi - p.pwz[j];
+        const double ox = pwxi - kj[8], oy = pwyi - kj[9], oz = pwzi - kj[10];
         const double om = std::sqrt(ox * ox + oy * oy + oz * oz);
         const double s = om > 0 ? -c.mu_roll * fn * (ri * rj / rr) / om : 0.0;
         q.roll[3 * k] = s * ox;
@@ -202,9 +206,28 @@ Engine::Engine(EngineSettings settings, Particles particles)
       }
     }
   }
+  // The first forces see the initial velocities.
+  p.pvx = p.vx;
+  p.pvy = p.vy;
+  p.pvz = p.vz;
+  p.pwx = p.wx;
+  p.pwy = p.wy;
+  p.pwz = p.wz;
+  refresh_kinematics();
   compute_forces(false);
   const Energies e = energies();
   initial_energy_ = e.kinetic + e.potential;
+}
+
+void Engine::refresh_kinematics() {
+  const Particles& p = particles_;
+  kin_.assign(kKinStride * p.size(), 0.0);
+  for (std::size_t k = 0; k < p.size(); ++k) {
+    double* kin = &kin_[kKinStride * k];
+    const double v[11] = {p.x[k],   p.y[k],    p.z[k],   p.radius[k], p.pvx[k], p.pvy[k],
+                          p.pvz[k], p.mass[k], p.pwx[k], p.pwy[k],    p.pwz[k]};
+    std::copy(v, v + 11, kin);
+  }
 }
 
 void Engine::rebuild() {
@@ -213,6 +236,7 @@ void Engine::rebuild() {
   index_of_id_.resize(particles_.size());
   for (std::size_t a = 0; a < particles_.size(); ++a)
     index_of_id_[particles_.id[a]] = static_cast<std::uint32_t>(a);
+  refresh_kinematics();
 }
 
 void Engine::fail(const std::string& what, std::uint32_t index) const {
@@ -259,6 +283,16 @@ void Engine::step() {
     p.pwx[k] = p.wx[k] + bx * s;
     p.pwy[k] = p.wy[k] + by * s;
     p.pwz[k] = p.wz[k] + bz * s;
+    double* kin = &kin_[kKinStride * k];
+    kin[0] = p.x[k];
+    kin[1] = p.y[k];
+    kin[2] = p.z[k];
+    kin[4] = p.pvx[k];
+    kin[5] = p.pvy[k];
+    kin[6] = p.pvz[k];
+    kin[8] = p.pwx[k];
+    kin[9] = p.pwy[k];
+    kin[10] = p.pwz[k];
     const double ddx = p.x[k] - p.x0[k], ddy = p.y[k] - p.y0[k], ddz = p.z[k] - p.z0[k];
     max_disp_sq = std::max(max_disp_sq, ddx * ddx + ddy * ddy + ddz * ddz);
     const double step_sq = mx * mx + my * my + mz * mz;
@@ -326,11 +360,11 @@ void Engine::compute_forces(bool final_kick) {
   {
     // Pair forces, row by row; the law's switches chosen at compile time.
     if (rolling) {
-      c.clamp ? pair_rows<true, true>(p, q, c, dt, row_sum_, large_pairs, bad_pair)
-              : pair_rows<true, false>(p, q, c, dt, row_sum_, large_pairs, bad_pair);
+      c.clamp ? pair_rows<true, true>(kin_.data(), n, q, c, dt, row_sum_, large_pairs, bad_pair)
+              : pair_rows<true, false>(kin_.data(), n, q, c, dt, row_sum_, large_pairs, bad_pair);
     } else {
-      c.clamp ? pair_rows<false, true>(p, q, c, dt, row_sum_, large_pairs, bad_pair)
-              : pair_rows<false, false>(p, q, c, dt, row_sum_, large_pairs, bad_pair);
+      c.clamp ? pair_rows<false, true>(kin_.data(), n, q, c, dt, row_sum_, large_pairs, bad_pair)
+              : pair_rows<false, false>(kin_.data(), n, q, c, dt, row_sum_, large_pairs, bad_pair);
     }
 #pragma omp single nowait
     t_pairs = omp_get_wtime();
@@ -525,6 +559,7 @@ void Engine::restore(const State& state, Particles particles, PairList pairs) {
   index_of_id_.assign(particles_.size(), 0);
   for (std::size_t a = 0; a < particles_.size(); ++a)
     index_of_id_[particles_.id[a]] = static_cast<std::uint32_t>(a);
+  refresh_kinematics();
 }
 
 }  // namespace contactlab::dem

@@ -98,6 +98,7 @@ class Engine {
 
  private:
   void rebuild();
+  void refresh_kinematics();  // kin_ from the particle arrays (after a reorder or restore)
   void compute_forces(bool final_kick);
   void check_pair_overlap(std::size_t k) const;
   [[noreturn]] void fail(const std::string& what, std::uint32_t index) const;
@@ -115,6 +116,7 @@ class Engine {
   double base_time_s_ = 0.0;  // time and step of the last restore: t = base + (step - base) dt
   std::uint64_t base_step_ = 0;
   PhaseTimes phases_;
+  std::vector<double> kin_;      // what the pair loop reads per particle, side by side
   std::vector<double> row_sum_;  // per particle: its own row's force, torque, touching count
 };
 
