@@ -35,6 +35,28 @@ TEST(DemEngine, BitIdenticalForAnyThreadCount) {
   }
 }
 
+// The fused pass (each particle gathered as soon as its rows are done) and the split one (pair
+// loop, then gather) give the same bits, at any thread count.
+TEST(DemEngine, FusedAndSplitForcePassesAgree) {
+  auto [settings, particles] = test::small_bed();
+  std::vector<double> reference;
+  for (const bool fused : {true, false}) {
+    for (const int threads : {1, 3}) {
+      EngineSettings s = settings;
+      s.fused_force_pass = fused;
+      s.threads = threads;
+      Engine engine(s, particles);
+      engine.run_steps(800);
+      const std::vector<double> state = test::state_by_id(engine);
+      if (reference.empty()) {
+        reference = state;
+      } else {
+        EXPECT_TRUE(test::bitwise_equal(reference, state)) << fused << " " << threads;
+      }
+    }
+  }
+}
+
 TEST(DemEngine, BitIdenticalForAnySchedule) {
   auto [settings, particles] = test::small_bed(60);
   settings.threads = 2;

@@ -19,7 +19,7 @@ for round in $(seq "$rounds"); do
   for threads in 1 2; do
     CONTACTLAB_DEM_BENCH_CONFIG="$repo/experiments/dem/settle-bed.json" \
     CONTACTLAB_DEM_BENCH_CHECKPOINT="$checkpoint" \
-      "$build/kernels/dem/contactlab_dem_benchmark" --benchmark_filter="threads:$threads/" \
+      "$build/kernels/dem/contactlab_dem_benchmark" --benchmark_filter="BM_DemStep/threads:$threads/" \
       --benchmark_min_time=10 --benchmark_format=csv 2>/dev/null |
       awk -F, -v r="$round" -v t="$threads" '/BM_DemStep/ {print "round " r ": contactlab threads " t ": " $0}'
     (cd "$work" && OMP_NUM_THREADS=1 mpirun -np "$threads" lmp -nocite -in in.bench-data \

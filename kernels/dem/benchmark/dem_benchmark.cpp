@@ -1,5 +1,6 @@
-// Google Benchmark of DEM steps on a settled bed: particle-steps per second and the phase split
-// (neighbour list, pair forces, walls + gather + kick, integration) per thread count.
+// Google Benchmark of DEM steps on a settled bed: particle-steps per second per thread count,
+// and the phase split (neighbour list, pair forces, walls + gather + kick, integration) from
+// the split force pass.
 //
 // The bed is the checkpoint of experiments/dem/settle-bed.json when CONTACTLAB_DEM_BENCH_CONFIG
 // and CONTACTLAB_DEM_BENCH_CHECKPOINT name them; otherwise a small bed of
@@ -73,10 +74,11 @@ Bed& bed() {
   return b;
 }
 
-std::unique_ptr<Engine> fresh_engine(int threads) {
+std::unique_ptr<Engine> fresh_engine(int threads, bool fused) {
   Bed& b = bed();
   EngineSettings s = b.settings;
   s.threads = threads;
+  s.fused_force_pass = fused;
   s.warn_large_overlaps = false;
   auto engine = std::make_unique<Engine>(s, b.initial);
   if (!b.checkpoint.empty()) {
@@ -87,9 +89,12 @@ std::unique_ptr<Engine> fresh_engine(int threads) {
   return engine;
 }
 
-void BM_DemStep(benchmark::State& state) {
+// fused: the production pass (pair rows with each particle's gather as soon as its rows are
+// done); split: pair loop, then gather, so the phase shares separate pair forces from the
+// gather + walls + kick.
+void run_steps(benchmark::State& state, bool fused) {
   const int threads = static_cast<int>(state.range(0));
-  std::unique_ptr<Engine> engine = fresh_engine(threads);
+  std::unique_ptr<Engine> engine = fresh_engine(threads, fused);
   engine->run_steps(20);  // warm-up: first touches, one rebuild if due
   const PhaseTimes before = engine->phase_times();
   std::uint64_t steps = 0;
@@ -114,8 +119,18 @@ void BM_DemStep(benchmark::State& state) {
   for (const auto t : engine->particles().contacts) touching += t;
   state.counters["contacts_per_particle"] = static_cast<double>(touching) / n;
   state.counters["pairs_per_particle"] = static_cast<double>(engine->pairs().size()) / n;
+  state.counters["max_span"] = static_cast<double>(engine->pairs().max_span);
 }
+
+void BM_DemStep(benchmark::State& state) { run_steps(state, true); }
+void BM_DemStepSplit(benchmark::State& state) { run_steps(state, false); }
 BENCHMARK(BM_DemStep)
+    ->Arg(1)
+    ->Arg(2)
+    ->ArgName("threads")
+    ->UseRealTime()
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_DemStepSplit)
     ->Arg(1)
     ->Arg(2)
     ->ArgName("threads")

@@ -204,7 +204,7 @@ void Engine::compute_forces(bool final_kick) {
   const std::size_t n = p.size();
   const double dt = settings_.dt_s, half = 0.5 * dt;
   const bool rolling = c.mu_roll > 0;
-  std::uint64_t large = 0, large_pairs = 0;  // the pair loop adds atomically, the gather reduces
+  std::uint64_t large = 0;  // overlaps above 1 %: the threads add exactly (integers)
   std::uint32_t bad_pair = UINT32_MAX, bad_wall_particle = UINT32_MAX;
   row_sum_.resize(7 * n);
   const std::size_t j_total = q.j_pairs.size();
@@ -222,134 +222,158 @@ void Engine::compute_forces(bool final_kick) {
     wall_plane[w] = wall.kind == WallKind::kPlane;
     wall_active[w] = wall.active(time_s_);
   }
+  // A particle's gather: its own row's sum, then the pairs where it is the j in pair order
+  // (fixed, so bit-identical for any thread count), walls, gravity, kick.
+  auto gather = [&](std::size_t a, std::uint64_t& large_here, std::uint32_t& bad_wall_here) {
+    const double* sum = &row_sum_[7 * a];
+    double fx = sum[0], fy = sum[1], fz = sum[2], tx = sum[3], ty = sum[4], tz = sum[5];
+    const double r = p.radius[a];
+    unsigned touching = static_cast<unsigned>(sum[6]);
+    const std::uint32_t e_end = q.j_offsets[a + 1];
+    for (std::uint32_t e = q.j_offsets[a]; e < e_end; ++e) {
+      const std::size_t k = q.j_pairs[e];
+      // The j-side slots were written by rows up to a layer of cells back (an L2 miss each):
+      // fetch those of the particles a few ahead.
+      if (e + kPrefetchAhead < j_total) {
+        __builtin_prefetch(&q.out[6 * std::size_t{q.j_pairs[e + kPrefetchAhead]}]);
+      }
+      const double* out = &q.out[6 * k];
+      fx -= out[0];
+      fy -= out[1];
+      fz -= out[2];
+      tx -= r * out[3];
+      ty -= r * out[4];
+      tz -= r * out[5];
+      if (rolling) {
+        tx -= q.roll[3 * k];
+        ty -= q.roll[3 * k + 1];
+        tz -= q.roll[3 * k + 2];
+      }
+      touching += (out[0] != 0.0) | (out[1] != 0.0) | (out[2] != 0.0);  // a non-zero force
+    }
+    for (std::size_t w = 0; w < wall_count; ++w) {
+      double* hx = &p.wall_spring[3 * w][a];
+      double* hy = &p.wall_spring[3 * w + 1][a];
+      double* hz = &p.wall_spring[3 * w + 2][a];
+      double dx, dy, dz;
+      bool any = wall_active[w];
+      if (wall_plane[w]) {  // inline: the distance along the normal, no closest point
+        const Vec3& o = wall_point[w];
+        const Vec3& nn = settings_.walls[w].normal;
+        const double along =
+            (p.x[a] - o[0]) * nn[0] + (p.y[a] - o[1]) * nn[1] + (p.z[a] - o[2]) * nn[2];
+        dx = along * nn[0];
+        dy = along * nn[1];
+        dz = along * nn[2];
+      } else {
+        Vec3 cp{};
+        any = closest_point(settings_.walls[w], time_s_, {p.x[a], p.y[a], p.z[a]}, cp);
+        dx = p.x[a] - cp[0];
+        dy = p.y[a] - cp[1];
+        dz = p.z[a] - cp[2];
+      }
+      const double rsq = dx * dx + dy * dy + dz * dz;
+      if (!any || rsq >= r * r || rsq == 0.0) {
+        *hx = *hy = *hz = 0.0;
+        continue;
+      }
+      const double dist = std::sqrt(rsq), inv = 1.0 / dist;
+      const double nx = dx * inv, ny = dy * inv, nz = dz * inv;
+      const double delta = r - dist;
+      large_here += delta > kWarnFraction * r;
+      if (delta > kFailFraction * r)
+        bad_wall_here = std::min(bad_wall_here, static_cast<std::uint32_t>(a));
+      const double m_star = p.mass[a];
+      const Vec3& wv = wall_velocity[w];
+      const double sx = r * p.pwx[a], sy = r * p.pwy[a], sz = r * p.pwz[a];
+      const double vx = p.pvx[a] - wv[0] - (sy * nz - sz * ny);
+      const double vy = p.pvy[a] - wv[1] - (sz * nx - sx * nz);
+      const double vz = p.pvz[a] - wv[2] - (sx * ny - sy * nx);
+      const double vn = vx * nx + vy * ny + vz * nz;
+      const double kn = c.k_abs + c.k_per_mass * m_star, cn = c.c_per_mass * m_star;
+      double fn = kn * delta - cn * vn;
+      if (c.clamp) fn = std::max(fn, 0.0);
+      const Tangential ft = tangential(nx, ny, nz, vx - vn * nx, vy - vn * ny, vz - vn * nz, fn,
+                                       c.kt_ratio * kn, c.ct_ratio * cn, c.mu, dt, *hx, *hy, *hz);
+      fx += fn * nx + ft.ftx;
+      fy += fn * ny + ft.fty;
+      fz += fn * nz + ft.ftz;
+      tx -= r * (ny * ft.ftz - nz * ft.fty);
+      ty -= r * (nz * ft.ftx - nx * ft.ftz);
+      tz -= r * (nx * ft.fty - ny * ft.ftx);
+      if (rolling) {
+        const double om =
+            std::sqrt(p.pwx[a] * p.pwx[a] + p.pwy[a] * p.pwy[a] + p.pwz[a] * p.pwz[a]);
+        const double s = om > 0 ? -c.mu_roll * fn * r / om : 0.0;
+        tx += s * p.pwx[a];
+        ty += s * p.pwy[a];
+        tz += s * p.pwz[a];
+      }
+      touching += fn > 0;
+    }
+    p.contacts[a] = static_cast<std::uint16_t>(touching);
+    p.force_magnitude[a] = std::sqrt(fx * fx + fy * fy + fz * fz);
+    const double mass = p.mass[a];
+    // Optional background drag (settling only): F = -c v with the synchronised velocity.
+    fx -= settings_.viscous_damping * p.pvx[a];
+    fy -= settings_.viscous_damping * p.pvy[a];
+    fz -= settings_.viscous_damping * p.pvz[a];
+    fx += mass * settings_.gravity[0];
+    fy += mass * settings_.gravity[1];
+    fz += mass * settings_.gravity[2];
+    p.fx[a] = fx;
+    p.fy[a] = fy;
+    p.fz[a] = fz;
+    p.tx[a] = tx;
+    p.ty[a] = ty;
+    p.tz[a] = tz;
+    if (final_kick) {
+      p.vx[a] += fx * p.inv_mass[a] * half;
+      p.vy[a] += fy * p.inv_mass[a] * half;
+      p.vz[a] += fz * p.inv_mass[a] * half;
+      p.wx[a] += tx * p.inv_inertia[a] * half;
+      p.wy[a] += ty * p.inv_inertia[a] * half;
+      p.wz[a] += tz * p.inv_inertia[a] * half;
+    }
+  };
+  auto gather_loop = [&] {  // the gather alone (for the phase split)
+    std::uint64_t large_here = 0;
+    std::uint32_t bad_wall_here = UINT32_MAX;
+#pragma omp for schedule(static)
+    for (std::size_t a = 0; a < n; ++a) gather(a, large_here, bad_wall_here);
+    detail::combine_counts(large_here, bad_wall_here, large, bad_wall_particle);
+  };
+  const double* kin = kin_.data();
 #pragma omp parallel num_threads(settings_.threads)
   {
-    // Pair forces, row by row; the law's switches chosen at compile time.
-    if (rolling) {
-      c.clamp ? pair_rows<true, true>(kin_.data(), n, q, c, dt, row_sum_, large_pairs, bad_pair)
-              : pair_rows<true, false>(kin_.data(), n, q, c, dt, row_sum_, large_pairs, bad_pair);
+    // The law's switches chosen at compile time.
+    if (settings_.fused_force_pass) {
+      if (rolling) {
+        c.clamp ? detail::fused_pass<true, true>(kin, n, q, c, dt, row_sum_, gather, large,
+                                                 bad_pair, bad_wall_particle)
+                : detail::fused_pass<true, false>(kin, n, q, c, dt, row_sum_, gather, large,
+                                                  bad_pair, bad_wall_particle);
+      } else {
+        c.clamp ? detail::fused_pass<false, true>(kin, n, q, c, dt, row_sum_, gather, large,
+                                                  bad_pair, bad_wall_particle)
+                : detail::fused_pass<false, false>(kin, n, q, c, dt, row_sum_, gather, large,
+                                                   bad_pair, bad_wall_particle);
+      }
     } else {
-      c.clamp ? pair_rows<false, true>(kin_.data(), n, q, c, dt, row_sum_, large_pairs, bad_pair)
-              : pair_rows<false, false>(kin_.data(), n, q, c, dt, row_sum_, large_pairs, bad_pair);
-    }
+      if (rolling) {
+        c.clamp ? pair_rows<true, true>(kin, n, q, c, dt, row_sum_, large, bad_pair)
+                : pair_rows<true, false>(kin, n, q, c, dt, row_sum_, large, bad_pair);
+      } else {
+        c.clamp ? pair_rows<false, true>(kin, n, q, c, dt, row_sum_, large, bad_pair)
+                : pair_rows<false, false>(kin, n, q, c, dt, row_sum_, large, bad_pair);
+      }
+#pragma omp barrier
 #pragma omp single nowait
-    t_pairs = omp_get_wtime();
-    // Gather (own row's sum, then the pairs where the particle is j, in pair order: fixed, so
-    // bit-identical for any thread count), walls, gravity, kick.
-#pragma omp for schedule(static) reduction(+ : large) reduction(min : bad_wall_particle)
-    for (std::size_t a = 0; a < n; ++a) {
-      const double* sum = &row_sum_[7 * a];
-      double fx = sum[0], fy = sum[1], fz = sum[2], tx = sum[3], ty = sum[4], tz = sum[5];
-      const double r = p.radius[a];
-      unsigned touching = static_cast<unsigned>(sum[6]);
-      const std::uint32_t e_end = q.j_offsets[a + 1];
-      for (std::uint32_t e = q.j_offsets[a]; e < e_end; ++e) {
-        const std::size_t k = q.j_pairs[e];
-        // The j-side slots were written by rows up to a layer of cells back (an L2 miss each):
-        // fetch those of the particles a few ahead.
-        if (e + kPrefetchAhead < j_total) {
-          __builtin_prefetch(&q.out[6 * std::size_t{q.j_pairs[e + kPrefetchAhead]}]);
-        }
-        const double* out = &q.out[6 * k];
-        fx -= out[0];
-        fy -= out[1];
-        fz -= out[2];
-        tx -= r * out[3];
-        ty -= r * out[4];
-        tz -= r * out[5];
-        if (rolling) {
-          tx -= q.roll[3 * k];
-          ty -= q.roll[3 * k + 1];
-          tz -= q.roll[3 * k + 2];
-        }
-        touching += (out[0] != 0.0) | (out[1] != 0.0) | (out[2] != 0.0);  // a non-zero force
-      }
-      for (std::size_t w = 0; w < wall_count; ++w) {
-        double* hx = &p.wall_spring[3 * w][a];
-        double* hy = &p.wall_spring[3 * w + 1][a];
-        double* hz = &p.wall_spring[3 * w + 2][a];
-        double dx, dy, dz;
-        bool any = wall_active[w];
-        if (wall_plane[w]) {  // inline: the distance along the normal, no closest point
-          const Vec3& o = wall_point[w];
-          const Vec3& nn = settings_.walls[w].normal;
-          const double along =
-              (p.x[a] - o[0]) * nn[0] + (p.y[a] - o[1]) * nn[1] + (p.z[a] - o[2]) * nn[2];
-          dx = along * nn[0];
-          dy = along * nn[1];
-          dz = along * nn[2];
-        } else {
-          Vec3 cp{};
-          any = closest_point(settings_.walls[w], time_s_, {p.x[a], p.y[a], p.z[a]}, cp);
-          dx = p.x[a] - cp[0];
-          dy = p.y[a] - cp[1];
-          dz = p.z[a] - cp[2];
-        }
-        const double rsq = dx * dx + dy * dy + dz * dz;
-        if (!any || rsq >= r * r || rsq == 0.0) {
-          *hx = *hy = *hz = 0.0;
-          continue;
-        }
-        const double dist = std::sqrt(rsq), inv = 1.0 / dist;
-        const double nx = dx * inv, ny = dy * inv, nz = dz * inv;
-        const double delta = r - dist;
-        large += delta > kWarnFraction * r;
-        if (delta > kFailFraction * r)
-          bad_wall_particle = std::min(bad_wall_particle, std::uint32_t(a));
-        const double m_star = p.mass[a];
-        const Vec3& wv = wall_velocity[w];
-        const double sx = r * p.pwx[a], sy = r * p.pwy[a], sz = r * p.pwz[a];
-        const double vx = p.pvx[a] - wv[0] - (sy * nz - sz * ny);
-        const double vy = p.pvy[a] - wv[1] - (sz * nx - sx * nz);
-        const double vz = p.pvz[a] - wv[2] - (sx * ny - sy * nx);
-        const double vn = vx * nx + vy * ny + vz * nz;
-        const double kn = c.k_abs + c.k_per_mass * m_star, cn = c.c_per_mass * m_star;
-        double fn = kn * delta - cn * vn;
-        if (c.clamp) fn = std::max(fn, 0.0);
-        const Tangential ft = tangential(nx, ny, nz, vx - vn * nx, vy - vn * ny, vz - vn * nz, fn,
-                                         c.kt_ratio * kn, c.ct_ratio * cn, c.mu, dt, *hx, *hy, *hz);
-        fx += fn * nx + ft.ftx;
-        fy += fn * ny + ft.fty;
-        fz += fn * nz + ft.ftz;
-        tx -= r * (ny * ft.ftz - nz * ft.fty);
-        ty -= r * (nz * ft.ftx - nx * ft.ftz);
-        tz -= r * (nx * ft.fty - ny * ft.ftx);
-        if (rolling) {
-          const double om =
-              std::sqrt(p.pwx[a] * p.pwx[a] + p.pwy[a] * p.pwy[a] + p.pwz[a] * p.pwz[a]);
-          const double s = om > 0 ? -c.mu_roll * fn * r / om : 0.0;
-          tx += s * p.pwx[a];
-          ty += s * p.pwy[a];
-          tz += s * p.pwz[a];
-        }
-        touching += fn > 0;
-      }
-      p.contacts[a] = static_cast<std::uint16_t>(touching);
-      p.force_magnitude[a] = std::sqrt(fx * fx + fy * fy + fz * fz);
-      const double mass = p.mass[a];
-      // Optional background drag (settling only): F = -c v with the synchronised velocity.
-      fx -= settings_.viscous_damping * p.pvx[a];
-      fy -= settings_.viscous_damping * p.pvy[a];
-      fz -= settings_.viscous_damping * p.pvz[a];
-      fx += mass * settings_.gravity[0];
-      fy += mass * settings_.gravity[1];
-      fz += mass * settings_.gravity[2];
-      p.fx[a] = fx;
-      p.fy[a] = fy;
-      p.fz[a] = fz;
-      p.tx[a] = tx;
-      p.ty[a] = ty;
-      p.tz[a] = tz;
-      if (final_kick) {
-        p.vx[a] += fx * p.inv_mass[a] * half;
-        p.vy[a] += fy * p.inv_mass[a] * half;
-        p.vz[a] += fz * p.inv_mass[a] * half;
-        p.wx[a] += tx * p.inv_inertia[a] * half;
-        p.wy[a] += ty * p.inv_inertia[a] * half;
-        p.wz[a] += tz * p.inv_inertia[a] * half;
-      }
+      t_pairs = omp_get_wtime();
+      gather_loop();
     }
   }
+  if (settings_.fused_force_pass) t_pairs = omp_get_wtime();  // all of it counts as pair forces
   const double t2 = omp_get_wtime();
   phases_.pair_forces_s += t_pairs - t0;
   phases_.walls_gather_s += t2 - t_pairs;
@@ -357,7 +381,6 @@ void Engine::compute_forces(bool final_kick) {
   if (bad_wall_particle != UINT32_MAX) {
     fail("overlap with a wall above 10 % of the diameter", bad_wall_particle);
   }
-  large += large_pairs;
   large_overlaps_ += large;
   if (large > 0 && !warned_ && settings_.warn_large_overlaps) {
     warned_ = true;

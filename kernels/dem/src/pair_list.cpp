@@ -21,14 +21,42 @@ void PairList::resize(std::size_t n, bool rolling) {
 }
 
 void PairList::build_csr(std::size_t particles) {
-  // Rows: the list is built (and saved) grouped by i in ascending order.
-  rows.assign(particles + 1, 0);
+  // Orient every pair from the later particle to the earlier one (j < i), so that particle a's
+  // j sides all come from the rows (a, a + max_span]: the fused force pass gathers a as soon as
+  // those rows are done. A swapped pair's spring is seen from the other side (negated) and its
+  // image shift is negated (code 26 - code).
+  bool sorted = true;
   for (std::size_t k = 0; k < size(); ++k) {
-    if (k > 0 && i[k] < i[k - 1]) throw InputError("DEM pair list is not grouped by particle");
-    ++rows[i[k] + 1];
+    if (j[k] > i[k]) {
+      std::swap(i[k], j[k]);
+      image[k] = static_cast<std::uint8_t>(26 - image[k]);
+      hx[k] = -hx[k];
+      hy[k] = -hy[k];
+      hz[k] = -hz[k];
+    }
+    sorted = sorted && (k == 0 || i[k - 1] <= i[k]);
   }
+  // Rows: grouped by i, ascending (a stable counting sort when the orientation broke it).
+  rows.assign(particles + 1, 0);
+  for (std::size_t k = 0; k < size(); ++k) ++rows[i[k] + 1];
   for (std::size_t p = 0; p < particles; ++p) rows[p + 1] += rows[p];
-  // The pairs each particle is the j of, in pair order.
+  if (!sorted) {
+    std::vector<std::uint32_t> at(rows.begin(), rows.end() - 1), order(size());
+    for (std::size_t k = 0; k < size(); ++k) order[at[i[k]]++] = static_cast<std::uint32_t>(k);
+    auto apply = [&](auto& v) {
+      auto copy = v;
+      for (std::size_t k = 0; k < size(); ++k) v[k] = copy[order[k]];
+    };
+    apply(i);
+    apply(j);
+    apply(image);
+    apply(hx);
+    apply(hy);
+    apply(hz);
+  }
+  max_span = 0;
+  for (std::size_t k = 0; k < size(); ++k) max_span = std::max<std::size_t>(max_span, i[k] - j[k]);
+  // The pairs where each particle is the j, in pair order.
   j_offsets.assign(particles + 1, 0);
   for (std::size_t k = 0; k < size(); ++k) ++j_offsets[j[k] + 1];
   for (std::size_t p = 0; p < particles; ++p) j_offsets[p + 1] += j_offsets[p];

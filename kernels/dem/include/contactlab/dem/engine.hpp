@@ -35,10 +35,15 @@ struct EngineSettings {
   bool warn_large_overlaps = true;
   // Background drag F = -c v [kg/s] on every particle; 0 = off. For settling beds only (it
   // breaks the energy balance: its work counts as dissipated).
-  double viscous_damping = 0.0;  // the one warning per run on stderr
+  double viscous_damping = 0.0;
+  // One pass of pair rows with each particle's gather as soon as its rows are done (fast);
+  // false: the pair loop, then the gather (slower; PhaseTimes then splits the two). Both give
+  // bit-identical results.
+  bool fused_force_pass = true;  // the one warning per run on stderr
 };
 
-// Phase times of step() [s], summed since construction.
+// Phase times of step() [s], summed since construction. With the fused force pass the pair
+// forces, gather, walls and kick are one phase, counted in pair_forces_s.
 struct PhaseTimes {
   double neighbor_s = 0.0, pair_forces_s = 0.0, walls_gather_s = 0.0, integrate_s = 0.0;
 };

@@ -33,13 +33,17 @@ struct PairList {
   // i [N] (j gets minus it) and n x F_t [N] (j's torque is -r_j times it). `roll`: rolling
   // torque on i [N m] (j gets minus it), 3 a pair, only with rolling resistance.
   std::vector<double> out, roll;
-  // Pairs are grouped by i, ascending: particle a's own pairs are [rows[a], rows[a + 1]).
-  // The pairs where a is the j: j_pairs[j_offsets[a] .. j_offsets[a + 1]), in pair order.
+  // Pairs run from the later particle to the earlier (j < i) and are grouped by i, ascending:
+  // particle a's own pairs are [rows[a], rows[a + 1]). The pairs where a is the j:
+  // j_pairs[j_offsets[a] .. j_offsets[a + 1]), in pair order; they lie in the rows
+  // (a, a + max_span].
   std::vector<std::uint32_t> rows, j_offsets, j_pairs;
+  std::size_t max_span = 0;
   std::array<std::array<double, 3>, 27> shift{};  // image code -> shift [m]
 
   std::size_t size() const { return i.size(); }
   void resize(std::size_t n, bool rolling);
+  // Orients (j < i, springs and images follow), groups by i, and indexes rows and j sides.
   void build_csr(std::size_t particles);
 };
 
