@@ -22,7 +22,8 @@ int main(int argc, char** argv) {
                                                  cli::add_variants_command(app),
                                                  cli::add_sweep_command(app, command_line),
                                                  cli::add_tune_command(app, command_line),
-                                                 cli::add_demo_command(app)};
+                                                 cli::add_demo_command(app),
+                                                 cli::add_dem_command(app)};
 
   try {
     app.parse(argc, argv);

@@ -1,0 +1,188 @@
+// `contactlab dem run|validate|timestep`: DEM runs from a JSON config (VTK frames, energy CSV,
+// checkpoints), the validation cases as a table, and the time-step study.
+#include <fmt/core.h>
+#include <omp.h>
+
+#include <cmath>
+#include <memory>
+#include <string>
+
+#include "cli_shared.hpp"
+#include "contactlab/dem/checkpoint.hpp"
+#include "contactlab/dem/config.hpp"
+#include "contactlab/dem/output.hpp"
+#include "contactlab/dem/timestep_study.hpp"
+#include "contactlab/dem/validation.hpp"
+#include "contactlab/kernels/atomic_file.hpp"
+#include "contactlab/kernels/detector.hpp"
+#include "contactlab/kernels/error.hpp"
+
+namespace contactlab::cli {
+namespace {
+
+namespace dem = contactlab::dem;
+
+struct DemRunCommand {
+  std::string config_;
+  int threads_ = 0;
+  std::string vtk_dir_;
+  std::string restart_;
+  std::string checkpoint_;
+
+  int run() const {
+    const dem::DemConfig config = dem::read_dem_config(config_);
+    dem::EngineSettings settings = config.settings;
+    settings.threads = resolve_threads(threads_);
+    if (settings.threads < 1) throw InputError("--threads must be >= 0");
+    // Output paths are checked before any work.
+    std::unique_ptr<dem::FrameWriter> writer;
+    if (!vtk_dir_.empty()) writer = std::make_unique<dem::FrameWriter>(vtk_dir_, config.name);
+    std::string checkpoint = checkpoint_;
+    if (checkpoint.empty() && !vtk_dir_.empty()) {
+      checkpoint = vtk_dir_ + (vtk_dir_.back() == '/' ? "" : "/") + "last.chk";
+    }
+    if (!checkpoint.empty()) check_writable(checkpoint);
+    dem::Engine engine(settings, dem::make_particles(config));
+    int frame = 0;
+    if (!restart_.empty()) {
+      frame = dem::read_checkpoint(engine, restart_);
+      if (writer) writer->continue_series(engine.time_s(), frame);
+    }
+    const double dt = settings.dt_s;
+    // Steps to the config's end from where the (restarted) run stands; a restart may change dt.
+    const double remaining_s = std::max(0.0, config.end_time_s - engine.time_s());
+    const std::uint64_t total_steps =
+        engine.step_count() + static_cast<std::uint64_t>(std::llround(remaining_s / dt));
+    const std::uint64_t every =
+        config.output_every_s > 0
+            ? std::max<std::uint64_t>(
+                  1, static_cast<std::uint64_t>(std::llround(config.output_every_s / dt)))
+            : std::max<std::uint64_t>(1, total_steps);
+    fmt::print(
+        "dem run '{}': {} particles, {} walls, dt = {:.6g} s (stable limit {:.6g} s), "
+        "steps {} -> {}, {} threads\n",
+        config.name, engine.particles().size(), settings.walls.size(), dt, engine.stable_dt(),
+        engine.step_count(), total_steps, settings.threads);
+    if (writer && engine.step_count() == 0) writer->write(engine, frame++);
+    const double t0 = omp_get_wtime();
+    const std::uint64_t first_step = engine.step_count();
+    try {
+      while (engine.step_count() < total_steps) {
+        engine.step();
+        if ((engine.step_count() - first_step) % every == 0 || engine.step_count() == total_steps) {
+          if (writer) writer->write(engine, frame++);
+          if (!checkpoint.empty()) dem::write_checkpoint(engine, frame, checkpoint);
+        }
+      }
+    } catch (const dem::UnstableRun& e) {
+      fmt::print(stderr, "contactlab: error: unstable run: {}\n", e.what());
+      return 4;
+    }
+    const double wall = omp_get_wtime() - t0;
+    const double steps = static_cast<double>(engine.step_count() - first_step);
+    const dem::Energies e = engine.energies();
+    const dem::PhaseTimes& ph = engine.phase_times();
+    fmt::print("done: t = {:.6g} s, {} steps in {:.3f} s ({:.3g} particle-steps/s), {} rebuilds\n",
+               engine.time_s(), steps, wall,
+               steps * static_cast<double>(engine.particles().size()) / std::max(wall, 1e-9),
+               engine.rebuilds());
+    fmt::print(
+        "phases [s]: neighbour list {:.3f}, pair forces {:.3f}, walls+gather+kick {:.3f}, "
+        "integration {:.3f}\n",
+        ph.neighbor_s, ph.pair_forces_s, ph.walls_gather_s, ph.integrate_s);
+    fmt::print("energy [J]: kinetic {:.6g}, potential {:.6g}, dissipated {:.6g}\n", e.kinetic,
+               e.potential, e.dissipated);
+    if (engine.large_overlap_count() > 0) {
+      fmt::print("overlaps above 1 % of the smaller diameter: {} contact-steps\n",
+                 engine.large_overlap_count());
+    }
+    return 0;
+  }
+};
+
+struct DemValidateCommand {
+  std::string only_;
+  int run() const {
+    fmt::print("{:<58} {:<34} {:>13} {:>13} {:>10} {:>9}  {}\n", "case", "quantity", "expected",
+               "measured", "error", "tolerance", "result");
+    bool all = true;
+    int ran = 0;
+    for (const dem::ValidationCase& c : dem::validation_cases()) {
+      if (!only_.empty() && c.name != only_) continue;
+      ++ran;
+      for (const dem::ValidationRow& r : c.run()) {
+        all = all && r.pass;
+        fmt::print("{:<58} {:<34} {:>13.6g} {:>13.6g} {:>9.3g}{} {:>9.3g}  {}  {}\n", r.case_name,
+                   r.quantity, r.expected, r.measured, r.error, r.relative ? "r" : "a", r.tolerance,
+                   r.pass ? "pass" : "FAIL", r.note);
+      }
+    }
+    if (ran == 0) throw InputError("no validation case named '" + only_ + "'");
+    fmt::print("\nerror: r = relative, a = absolute. {}\n", all ? "All cases pass." : "FAILURES.");
+    return all ? 0 : 1;
+  }
+};
+
+struct DemTimestepCommand {
+  std::string config_;
+  std::uint64_t steps_ = 100;
+  int threads_ = 0;
+  int run() const {
+    const dem::DemConfig config = dem::read_dem_config(config_);
+    dem::EngineSettings settings = config.settings;
+    settings.threads = resolve_threads(threads_);
+    const dem::Particles particles = dem::make_particles(config);
+    const dem::TimestepStudy study = dem::timestep_study(settings, particles, steps_);
+    fmt::print(
+        "contact time t_c (lightest pair) {:.6g} s\nstable limit {:.6g} s ({:.3f} t_c)\n"
+        "recommended dt = t_c/50 = {:.6g} s (config: {:.6g} s)\n\n",
+        study.contact_time_s, study.stable_dt_s, study.stable_dt_s / study.contact_time_s,
+        study.recommended_dt_s, settings.dt_s);
+    fmt::print("{:>8} {:>12} {:>22} {:>14} {:>14} {:>14}\n", "dt", "dt [s]", "wall s / simulated s",
+               "|de| sync", "|de| half-step", "|1-e^2| e=1");
+    for (const dem::TimestepRow& r : study.rows) {
+      const std::string wall = r.wall_per_simulated_s < 0
+                                   ? std::string("refused")
+                                   : fmt::format("{:.4g}", r.wall_per_simulated_s);
+      fmt::print("{:>8} {:>12.4g} {:>22} {:>14.3g} {:>14.3g} {:>14.3g}\n",
+                 fmt::format("t_c/{:g}", r.divisor), r.dt_s, wall, r.e_error_synchronised,
+                 r.e_error_half_step, r.energy_error);
+    }
+    fmt::print(
+        "\nwall time from {} steps of the config's scene on {} threads; errors from a "
+        "head-on impact of two of its smallest spheres (e vs the clamp-predicted value)\n",
+        steps_, settings.threads);
+    return 0;
+  }
+};
+
+}  // namespace
+
+Subcommand add_dem_command(CLI::App& app) {
+  CLI::App* sub = app.add_subcommand("dem", "DEM: run a config, validate the engine, study dt");
+  sub->require_subcommand(1);
+  auto run = std::make_shared<DemRunCommand>();
+  CLI::App* run_app = sub->add_subcommand("run", "run a DEM config");
+  run_app->add_option("config", run->config_, "DEM config (JSON, docs/dem.md)")->required();
+  run_app->add_option("--threads", run->threads_, "OpenMP threads (0 = OpenMP's default)");
+  run_app->add_option("--vtk", run->vtk_dir_, "write DIR/<name>.pvd, frames, energy CSV, last.chk");
+  run_app->add_option("--restart", run->restart_, "continue from a checkpoint of this config");
+  run_app->add_option("--checkpoint", run->checkpoint_,
+                      "checkpoint file written at every output (default: DIR/last.chk with --vtk)");
+  auto validate = std::make_shared<DemValidateCommand>();
+  CLI::App* validate_app = sub->add_subcommand("validate", "run every validation case");
+  validate_app->add_option("--case", validate->only_, "run only this case");
+  auto timestep = std::make_shared<DemTimestepCommand>();
+  CLI::App* timestep_app =
+      sub->add_subcommand("timestep", "stable limit, recommended dt, speed against error");
+  timestep_app->add_option("config", timestep->config_, "DEM config")->required();
+  timestep_app->add_option("--steps", timestep->steps_, "steps of the scene timed per dt");
+  timestep_app->add_option("--threads", timestep->threads_, "OpenMP threads");
+  return {sub, [=] {
+            if (*run_app) return run->run();
+            if (*validate_app) return validate->run();
+            return timestep->run();
+          }};
+}
+
+}  // namespace contactlab::cli

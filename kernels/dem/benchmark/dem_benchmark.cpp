@@ -1,0 +1,142 @@
+// Google Benchmark of DEM steps on a settled bed: particle-steps per second per thread count,
+// and the phase split (neighbour list, pair forces, walls + gather + kick, integration) from
+// the split force pass.
+//
+// The bed is the checkpoint of experiments/dem/settle-bed.json when CONTACTLAB_DEM_BENCH_CONFIG
+// and CONTACTLAB_DEM_BENCH_CHECKPOINT name them; otherwise a small bed of
+// CONTACTLAB_DEM_BENCH_N spheres (default 4096) settled here at t_c/10 (for the smoke test).
+#include <benchmark/benchmark.h>
+
+#include <cstdlib>
+#include <memory>
+#include <string>
+
+#include "contactlab/dem/checkpoint.hpp"
+#include "contactlab/dem/config.hpp"
+#include "contactlab/dem/engine.hpp"
+
+namespace {
+
+using namespace contactlab::dem;
+
+struct Bed {
+  EngineSettings settings;
+  Particles initial;
+  std::string checkpoint;  // empty: settled in `settled`
+  std::unique_ptr<Engine> settled;
+};
+
+const char* env(const char* name) { return std::getenv(name); }
+
+Bed& bed() {
+  static Bed b = [] {
+    Bed made;
+    if (env("CONTACTLAB_DEM_BENCH_CONFIG") && env("CONTACTLAB_DEM_BENCH_CHECKPOINT")) {
+      const DemConfig config = read_dem_config(env("CONTACTLAB_DEM_BENCH_CONFIG"));
+      made.settings = config.settings;
+      made.initial = make_particles(config);
+      made.checkpoint = env("CONTACTLAB_DEM_BENCH_CHECKPOINT");
+      return made;
+    }
+    const long n = env("CONTACTLAB_DEM_BENCH_N") ? std::atol(env("CONTACTLAB_DEM_BENCH_N")) : 4096;
+    DemConfig config;
+    config.materials = {{"glass", 2500.0}};
+    EngineSettings& s = config.settings;
+    s.law.kind = NormalLawKind::kStiffness;  // the settle-bed law (LAMMPS' numbers)
+    s.law.normal_stiffness = 654.29;
+    s.law.normal_damping = 7133.4989;
+    s.law.friction = 0.5;
+    s.gravity = {0, 0, -9.81};
+    s.skin = 1e-4;
+    s.warn_large_overlaps = false;
+    const double side = 16e-3;
+    s.domain.lo = {0, 0, 0};
+    s.domain.hi = {side, side, 1.0};
+    s.domain.periodic = {true, true, false};
+    Wall floor;
+    floor.name = "floor";
+    s.walls.push_back(floor);
+    LatticeSpec lattice;
+    lattice.lo = {0, 0, 0};
+    lattice.hi = {side, side, 1.0};
+    lattice.count = static_cast<std::uint32_t>(n);
+    lattice.radius_min = lattice.radius_max = 5e-4;
+    lattice.material = "glass";
+    lattice.gap = 0.1;
+    config.lattices = {lattice};
+    made.initial = make_particles(config);
+    s.dt_s = 1e-5;  // settle at t_c/10, then time at t_c/50
+    made.settled = std::make_unique<Engine>(s, made.initial);
+    made.settled->run_steps(3000);
+    s.dt_s = 2e-6;
+    return made;
+  }();
+  return b;
+}
+
+std::unique_ptr<Engine> fresh_engine(int threads, bool fused) {
+  Bed& b = bed();
+  EngineSettings s = b.settings;
+  s.threads = threads;
+  s.fused_force_pass = fused;
+  s.warn_large_overlaps = false;
+  auto engine = std::make_unique<Engine>(s, b.initial);
+  if (!b.checkpoint.empty()) {
+    read_checkpoint(*engine, b.checkpoint);
+  } else {
+    engine->restore(b.settled->state(), b.settled->particles(), b.settled->pairs());
+  }
+  return engine;
+}
+
+// fused: the production pass (pair rows with each particle's gather as soon as its rows are
+// done); split: pair loop, then gather, so the phase shares separate pair forces from the
+// gather + walls + kick.
+void run_steps(benchmark::State& state, bool fused) {
+  const int threads = static_cast<int>(state.range(0));
+  std::unique_ptr<Engine> engine = fresh_engine(threads, fused);
+  engine->run_steps(20);  // warm-up: first touches, one rebuild if due
+  const PhaseTimes before = engine->phase_times();
+  std::uint64_t steps = 0;
+  for (auto _ : state) {
+    engine->step();
+    ++steps;
+  }
+  const PhaseTimes& after = engine->phase_times();
+  const double n = static_cast<double>(engine->particles().size());
+  state.counters["particle_steps_per_s"] =
+      benchmark::Counter(n * static_cast<double>(steps), benchmark::Counter::kIsRate);
+  const double neighbor = after.neighbor_s - before.neighbor_s;
+  const double pairs = after.pair_forces_s - before.pair_forces_s;
+  const double walls = after.walls_gather_s - before.walls_gather_s;
+  const double integrate = after.integrate_s - before.integrate_s;
+  const double total = neighbor + pairs + walls + integrate;
+  state.counters["share_neighbor"] = neighbor / total;
+  state.counters["share_pair_forces"] = pairs / total;
+  state.counters["share_walls_gather_kick"] = walls / total;
+  state.counters["share_integration"] = integrate / total;
+  std::uint64_t touching = 0;  // pair and wall contacts with a force, each counted per particle
+  for (const auto t : engine->particles().contacts) touching += t;
+  state.counters["contacts_per_particle"] = static_cast<double>(touching) / n;
+  state.counters["pairs_per_particle"] = static_cast<double>(engine->pairs().size()) / n;
+  state.counters["max_span"] = static_cast<double>(engine->pairs().max_span);
+}
+
+void BM_DemStep(benchmark::State& state) { run_steps(state, true); }
+void BM_DemStepSplit(benchmark::State& state) { run_steps(state, false); }
+BENCHMARK(BM_DemStep)
+    ->Arg(1)
+    ->Arg(2)
+    ->ArgName("threads")
+    ->UseRealTime()
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_DemStepSplit)
+    ->Arg(1)
+    ->Arg(2)
+    ->ArgName("threads")
+    ->UseRealTime()
+    ->Unit(benchmark::kMillisecond);
+
+}  // namespace
+
+BENCHMARK_MAIN();

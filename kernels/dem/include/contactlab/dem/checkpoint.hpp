@@ -1,0 +1,19 @@
+// Checkpoints of a DEM run: the complete engine state (particles in their current order, the
+// neighbour list with its contact history, counters) in a binary file written atomically, so
+// a restarted run continues bit-identically.
+#pragma once
+
+#include <string>
+
+#include "contactlab/dem/engine.hpp"
+
+namespace contactlab::dem {
+
+// `frames`: the output frames written so far (the restarted run continues the numbering).
+void write_checkpoint(const Engine& engine, int frames, const std::string& path);
+
+// Restores `engine` (built from the same config) from `path`; returns the frame count. Throws
+// InputError for a missing, truncated or foreign file, or one of another particle/wall count.
+int read_checkpoint(Engine& engine, const std::string& path);
+
+}  // namespace contactlab::dem

@@ -1,0 +1,78 @@
+// The DEM half neighbour list (pairs within r_i + r_j + skin, each once) with the contact
+// history aligned to it, rebuilt from the shared cell traversal (ContactDetector::neighbor_list)
+// with periodic images, particles reordered by cell, history carried by a sorted-key merge.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "contactlab/dem/particles.hpp"
+#include "contactlab/kernels/detector.hpp"
+
+namespace contactlab::dem {
+
+// The simulation domain: periodic axes wrap at [lo, hi); other axes are unbounded (walls bound
+// them), lo/hi there only describe the scene.
+struct Domain {
+  std::array<double, 3> lo{0, 0, 0}, hi{1, 1, 1};  // m
+  std::array<bool, 3> periodic{false, false, false};
+  double length(int axis) const { return hi[axis] - lo[axis]; }
+};
+
+// Periodic image of the partner: code = (ix + 1) + 3 (iy + 1) + 9 (iz + 1), the partner's image
+// at x_j + (ix Lx, iy Ly, iz Lz). kNoImage: the partner itself.
+inline constexpr std::uint8_t kNoImage = 13;
+
+struct PairList {
+  std::vector<std::uint32_t> i, j;  // particle indices (current order)
+  std::vector<std::uint8_t> image;  // periodic image code of j
+  std::vector<double> hx, hy, hz;   // tangential spring xi [m], oriented as seen from i
+  // The per-pair buffer for the j side, written by the force loop (each slot by the thread of
+  // the pair's row), 6 doubles a pair side by side so the gather reads one cache line: force on
+  // i [N] (j gets minus it) and n x F_t [N] (j's torque is -r_j times it). `roll`: rolling
+  // torque on i [N m] (j gets minus it), 3 a pair, only with rolling resistance.
+  std::vector<double> out, roll;
+  // Pairs run from the later particle to the earlier (j < i) and are grouped by i, ascending:
+  // particle a's own pairs are [rows[a], rows[a + 1]). The pairs where a is the j:
+  // j_pairs[j_offsets[a] .. j_offsets[a + 1]), in pair order; they lie in the rows
+  // (a, a + max_span].
+  std::vector<std::uint32_t> rows, j_offsets, j_pairs;
+  std::size_t max_span = 0;
+  std::array<std::array<double, 3>, 27> shift{};  // image code -> shift [m]
+
+  std::size_t size() const { return i.size(); }
+  void resize(std::size_t n, bool rolling);
+  // Orients (j < i, springs and images follow), groups by i, and indexes rows and j sides.
+  void build_csr(std::size_t particles);
+};
+
+struct RebuildStats {
+  std::size_t pairs = 0, carried_contacts = 0, ghosts = 0;
+};
+
+class NeighborBuilder {
+ public:
+  // Reorders `particles` by cell, rebuilds `pairs` for `skin` [m] and carries every non-zero
+  // tangential spring (pair and wall) to the new list. Periodic positions are wrapped into
+  // the domain first. Throws InputError if a periodic length is under 3 pair reaches.
+  RebuildStats rebuild(Particles& particles, PairList& pairs, const Domain& domain, double skin,
+                       bool rolling);
+
+ private:
+  ContactDetector detector_;
+  Scene scene_;
+  std::vector<std::uint32_t> ghost_owner_;
+  std::vector<std::uint8_t> ghost_image_;
+  std::vector<std::uint32_t> order_, new_index_;
+  std::vector<std::uint64_t> old_keys_, new_keys_, scratch_keys_;
+  std::vector<std::uint32_t> old_payload_, new_payload_, scratch_payload_;
+  std::vector<double> old_spring_;
+};
+
+// LSD radix sort of keys < 2^bits with their payloads (stable): O(n) per 11-bit digit.
+void radix_sort(std::vector<std::uint64_t>& keys, std::vector<std::uint32_t>& payload, int bits,
+                std::vector<std::uint64_t>& key_scratch,
+                std::vector<std::uint32_t>& payload_scratch);
+
+}  // namespace contactlab::dem

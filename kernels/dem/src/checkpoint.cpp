@@ -1,0 +1,163 @@
+// Binary checkpoints: a magic word, counts, the engine's State, then raw arrays.
+#include "contactlab/dem/checkpoint.hpp"
+
+#include <cstring>
+#include <fstream>
+#include <istream>
+#include <ostream>
+
+#include "contactlab/kernels/atomic_file.hpp"
+#include "contactlab/kernels/error.hpp"
+
+namespace contactlab::dem {
+namespace {
+
+constexpr char kMagic[8] = {'C', 'L', 'D', 'E', 'M', 'C', 'K', '1'};
+
+template <class T>
+void put(std::ostream& out, const T& v) {
+  out.write(reinterpret_cast<const char*>(&v), sizeof(T));
+}
+template <class T>
+void put_array(std::ostream& out, const std::vector<T>& v) {
+  put<std::uint64_t>(out, v.size());
+  out.write(reinterpret_cast<const char*>(v.data()),
+            static_cast<std::streamsize>(v.size() * sizeof(T)));
+}
+
+class Reader {
+ public:
+  Reader(std::istream& in, std::string path) : in_(in), path_(std::move(path)) {}
+  template <class T>
+  T get() {
+    T v{};
+    in_.read(reinterpret_cast<char*>(&v), sizeof(T));
+    if (!in_) throw InputError(path_ + ": checkpoint is truncated");
+    return v;
+  }
+  template <class T>
+  void array(std::vector<T>& v, std::uint64_t expected) {
+    const auto n = get<std::uint64_t>();
+    if (n != expected) throw InputError(path_ + ": checkpoint arrays do not match the config");
+    v.resize(n);
+    in_.read(reinterpret_cast<char*>(v.data()), static_cast<std::streamsize>(n * sizeof(T)));
+    if (!in_) throw InputError(path_ + ": checkpoint is truncated");
+  }
+
+ private:
+  std::istream& in_;
+  std::string path_;
+};
+
+template <class F>
+void for_each_array(Particles& p, F f) {
+  f(p.id);
+  f(p.material);
+  f(p.contacts);
+  for (auto* v : {&p.x,
+                  &p.y,
+                  &p.z,
+                  &p.vx,
+                  &p.vy,
+                  &p.vz,
+                  &p.wx,
+                  &p.wy,
+                  &p.wz,
+                  &p.pvx,
+                  &p.pvy,
+                  &p.pvz,
+                  &p.pwx,
+                  &p.pwy,
+                  &p.pwz,
+                  &p.fx,
+                  &p.fy,
+                  &p.fz,
+                  &p.tx,
+                  &p.ty,
+                  &p.tz,
+                  &p.radius,
+                  &p.mass,
+                  &p.inv_mass,
+                  &p.inv_inertia,
+                  &p.x0,
+                  &p.y0,
+                  &p.z0,
+                  &p.force_magnitude}) {
+    f(*v);
+  }
+  for (auto& v : p.wall_spring) f(v);
+}
+
+}  // namespace
+
+void write_checkpoint(const Engine& engine, int frames, const std::string& path) {
+  write_file_atomically(
+      path,
+      [&](std::ostream& out) {
+        out.write(kMagic, sizeof kMagic);
+        Particles p = engine.particles();
+        const PairList& q = engine.pairs();
+        const Engine::State s = engine.state();
+        put<std::uint64_t>(out, p.size());
+        put<std::uint64_t>(out, p.wall_spring.size());
+        put<std::uint64_t>(out, q.size());
+        put<std::int32_t>(out, frames);
+        put(out, s.time_s);
+        put(out, s.step);
+        put(out, s.rebuilds);
+        put(out, s.large_overlaps);
+        put(out, s.initial_energy);
+        for_each_array(p, [&](const auto& v) { put_array(out, v); });
+        put_array(out, q.i);
+        put_array(out, q.j);
+        put_array(out, q.image);
+        put_array(out, q.hx);
+        put_array(out, q.hy);
+        put_array(out, q.hz);
+      },
+      true);
+}
+
+int read_checkpoint(Engine& engine, const std::string& path) {
+  std::ifstream file(path, std::ios::binary);
+  if (!file) throw InputError("cannot open checkpoint '" + path + "'");
+  char magic[8];
+  file.read(magic, sizeof magic);
+  if (!file || std::memcmp(magic, kMagic, sizeof magic) != 0) {
+    throw InputError(path + ": not a contactlab DEM checkpoint");
+  }
+  Reader in(file, path);
+  const auto n = in.get<std::uint64_t>();
+  const auto walls3 = in.get<std::uint64_t>();
+  const auto pairs = in.get<std::uint64_t>();
+  if (n != engine.particles().size() || walls3 != engine.particles().wall_spring.size()) {
+    throw InputError(path + ": checkpoint has " + std::to_string(n) +
+                     " particles and another wall count than the config (" +
+                     std::to_string(engine.particles().size()) + " particles)");
+  }
+  const int frames = in.get<std::int32_t>();
+  Engine::State s;
+  s.time_s = in.get<double>();
+  s.step = in.get<std::uint64_t>();
+  s.rebuilds = in.get<std::uint64_t>();
+  s.large_overlaps = in.get<std::uint64_t>();
+  s.initial_energy = in.get<double>();
+  Particles p = engine.particles();
+  for_each_array(p, [&](auto& v) { in.array(v, n); });
+  PairList q;
+  in.array(q.i, pairs);
+  in.array(q.j, pairs);
+  in.array(q.image, pairs);
+  in.array(q.hx, pairs);
+  in.array(q.hy, pairs);
+  in.array(q.hz, pairs);
+  for (std::size_t k = 0; k < pairs; ++k) {
+    if (q.i[k] >= n || q.j[k] >= n || q.image[k] >= 27) {
+      throw InputError(path + ": checkpoint pair list is corrupt");
+    }
+  }
+  engine.restore(s, std::move(p), std::move(q));
+  return frames;
+}
+
+}  // namespace contactlab::dem

@@ -1,0 +1,454 @@
+// Velocity Verlet with synchronised velocities in the forces, and the deterministic force
+// evaluation: pair forces into a per-pair buffer, gathered per particle through its CSR.
+#include "contactlab/dem/engine.hpp"
+
+#include <fmt/core.h>
+#include <omp.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "contactlab/kernels/error.hpp"
+#include "pair_forces.hpp"
+
+namespace contactlab::dem {
+using detail::kFailFraction;
+using detail::kKinStride;
+using detail::kWarnFraction;
+using detail::pair_rows;
+using detail::tangential;
+using detail::Tangential;
+
+Engine::Engine(EngineSettings settings, Particles particles)
+    : settings_(std::move(settings)),
+      coefficients_(pair_coefficients(settings_.law)),
+      particles_(std::move(particles)) {
+  Particles& p = particles_;
+  const std::size_t n = p.size();
+  if (n == 0) throw InputError("no particles");
+  double max_d = 0.0, min_m = std::numeric_limits<double>::infinity();
+  for (std::size_t k = 0; k < n; ++k) {
+    max_d = std::max(max_d, 2.0 * p.radius[k]);
+    min_m = std::min(min_m, p.mass[k]);
+  }
+  if (settings_.skin <= 0.0) settings_.skin = 0.1 * max_d;
+  // The stiffest contact: two of the lightest particles (m* = m/2) or one on a wall (m* = m);
+  // in (e, t_c) form both have the same w0, in (k_n, gamma_n) form the pair is stiffer.
+  stable_dt_ = stable_time_step(coefficients_, 0.5 * min_m);
+  if (!settings_.walls.empty())
+    stable_dt_ = std::min(stable_dt_, stable_time_step(coefficients_, min_m));
+  if (!(settings_.dt_s > 0) || settings_.dt_s > stable_dt_) {
+    throw InputError(
+        fmt::format("time step {:.6g} s is above the stable limit {:.6g} s "
+                    "(2/w0 for the stiffest pair; recommended t_c/50 = {:.6g} s)",
+                    settings_.dt_s, stable_dt_, contact_time(coefficients_, 0.5 * min_m) / 50.0));
+  }
+  p.set_wall_count(settings_.walls.size());
+  rebuild();
+  // Initial overlaps: pairs and walls.
+  const double tol = settings_.initial_overlap_tolerance;
+  for (std::size_t k = 0; k < pairs_.size(); ++k) {
+    const std::uint32_t i = pairs_.i[k], j = pairs_.j[k];
+    const auto& sh = pairs_.shift[pairs_.image[k]];
+    const double dx = p.x[i] - p.x[j] - sh[0], dy = p.y[i] - p.y[j] - sh[1],
+                 dz = p.z[i] - p.z[j] - sh[2];
+    const double overlap = p.radius[i] + p.radius[j] - std::sqrt(dx * dx + dy * dy + dz * dz);
+    if (overlap > tol * 2.0 * std::min(p.radius[i], p.radius[j])) {
+      throw InputError(
+          fmt::format("particles {} and {} overlap by {:.3g} m at start (more than "
+                      "{} of the smaller diameter)",
+                      p.id[i], p.id[j], overlap, tol));
+    }
+  }
+  for (std::size_t w = 0; w < settings_.walls.size(); ++w) {
+    for (std::size_t k = 0; k < n; ++k) {
+      Vec3 q;
+      if (!closest_point(settings_.walls[w], 0.0, {p.x[k], p.y[k], p.z[k]}, q)) continue;
+      const double dist = std::hypot(p.x[k] - q[0], p.y[k] - q[1], p.z[k] - q[2]);
+      if (p.radius[k] - dist > tol * 2.0 * p.radius[k]) {
+        throw InputError(fmt::format("particle {} overlaps wall '{}' by {:.3g} m at start", p.id[k],
+                                     settings_.walls[w].name, p.radius[k] - dist));
+      }
+    }
+  }
+  // The first forces see the initial velocities.
+  p.pvx = p.vx;
+  p.pvy = p.vy;
+  p.pvz = p.vz;
+  p.pwx = p.wx;
+  p.pwy = p.wy;
+  p.pwz = p.wz;
+  refresh_kinematics();
+  compute_forces(false);
+  const Energies e = energies();
+  initial_energy_ = e.kinetic + e.potential;
+}
+
+void Engine::refresh_kinematics() {
+  const Particles& p = particles_;
+  kin_.assign(kKinStride * p.size(), 0.0);
+  for (std::size_t k = 0; k < p.size(); ++k) {
+    double* kin = &kin_[kKinStride * k];
+    const double v[11] = {p.x[k],   p.y[k],    p.z[k],   p.radius[k], p.pvx[k], p.pvy[k],
+                          p.pvz[k], p.mass[k], p.pwx[k], p.pwy[k],    p.pwz[k]};
+    std::copy(v, v + 11, kin);
+  }
+}
+
+void Engine::rebuild() {
+  builder_.rebuild(particles_, pairs_, settings_.domain, settings_.skin, coefficients_.mu_roll > 0);
+  ++rebuilds_;
+  index_of_id_.resize(particles_.size());
+  for (std::size_t a = 0; a < particles_.size(); ++a)
+    index_of_id_[particles_.id[a]] = static_cast<std::uint32_t>(a);
+  refresh_kinematics();
+}
+
+void Engine::fail(const std::string& what, std::uint32_t index) const {
+  const Particles& p = particles_;
+  throw UnstableRun(
+      fmt::format("{} at step {} (t = {:.9g} s): particle {} at ({:.9g}, {:.9g}, "
+                  "{:.9g}) m",
+                  what, step_, time_s_, p.id[index], p.x[index], p.y[index], p.z[index]));
+}
+
+void Engine::step() {
+  Particles& p = particles_;
+  const std::size_t n = p.size();
+  const double dt = settings_.dt_s, half = 0.5 * dt;
+  const bool sync = settings_.velocity_in_forces == VelocityInForces::kSynchronised;
+  const double move_limit_sq = 0.25 * settings_.skin * settings_.skin;
+  double t0 = omp_get_wtime();
+  double max_disp_sq = 0.0;
+  std::uint32_t bad = UINT32_MAX;  // the first particle that moved too far or is not finite
+#pragma omp parallel for schedule(static) num_threads(settings_.threads) reduction(max            \
+                                                                                   : max_disp_sq) \
+    reduction(min                                                                                 \
+              : bad)
+  for (std::size_t k = 0; k < n; ++k) {
+    const double ax = p.fx[k] * p.inv_mass[k], ay = p.fy[k] * p.inv_mass[k],
+                 az = p.fz[k] * p.inv_mass[k];
+    const double bx = p.tx[k] * p.inv_inertia[k], by = p.ty[k] * p.inv_inertia[k],
+                 bz = p.tz[k] * p.inv_inertia[k];
+    p.vx[k] += ax * half;
+    p.vy[k] += ay * half;
+    p.vz[k] += az * half;
+    p.wx[k] += bx * half;
+    p.wy[k] += by * half;
+    p.wz[k] += bz * half;
+    const double mx = p.vx[k] * dt, my = p.vy[k] * dt, mz = p.vz[k] * dt;
+    p.x[k] += mx;
+    p.y[k] += my;
+    p.z[k] += mz;
+    // Synchronised: v(t + dt) ~ v(t + dt/2) + a(t) dt/2.
+    const double s = sync ? half : 0.0;
+    p.pvx[k] = p.vx[k] + ax * s;
+    p.pvy[k] = p.vy[k] + ay * s;
+    p.pvz[k] = p.vz[k] + az * s;
+    p.pwx[k] = p.wx[k] + bx * s;
+    p.pwy[k] = p.wy[k] + by * s;
+    p.pwz[k] = p.wz[k] + bz * s;
+    double* kin = &kin_[kKinStride * k];
+    kin[0] = p.x[k];
+    kin[1] = p.y[k];
+    kin[2] = p.z[k];
+    kin[4] = p.pvx[k];
+    kin[5] = p.pvy[k];
+    kin[6] = p.pvz[k];
+    kin[8] = p.pwx[k];
+    kin[9] = p.pwy[k];
+    kin[10] = p.pwz[k];
+    const double ddx = p.x[k] - p.x0[k], ddy = p.y[k] - p.y0[k], ddz = p.z[k] - p.z0[k];
+    max_disp_sq = std::max(max_disp_sq, ddx * ddx + ddy * ddy + ddz * ddz);
+    const double step_sq = mx * mx + my * my + mz * mz;
+    if (!(step_sq <= move_limit_sq) || !std::isfinite(p.x[k] + p.y[k] + p.z[k])) {
+      bad = std::min(bad, static_cast<std::uint32_t>(k));
+    }
+  }
+  // Time from the last (re)start's base: exact multiples of dt, also after a dt change.
+  time_s_ = base_time_s_ + static_cast<double>(step_ + 1 - base_step_) * dt;
+  ++step_;
+  double t1 = omp_get_wtime();
+  phases_.integrate_s += t1 - t0;
+  if (bad != UINT32_MAX) {
+    const double m = std::hypot(p.vx[bad], p.vy[bad], p.vz[bad]) * dt;
+    fail(std::isfinite(m) ? fmt::format("moved {:.3g} m in one step, more than skin/2 = {:.3g} m",
+                                        m, 0.5 * settings_.skin)
+                          : std::string("position or velocity is not finite (NaN)"),
+         bad);
+  }
+  if (max_disp_sq > move_limit_sq) {
+    rebuild();
+    phases_.neighbor_s += omp_get_wtime() - t1;
+  }
+  compute_forces(true);
+}
+
+void Engine::check_pair_overlap(std::size_t k) const {
+  const Particles& p = particles_;
+  const std::uint32_t i = pairs_.i[k], j = pairs_.j[k];
+  const auto& sh = pairs_.shift[pairs_.image[k]];
+  const double overlap =
+      p.radius[i] + p.radius[j] -
+      std::hypot(p.x[i] - p.x[j] - sh[0], p.y[i] - p.y[j] - sh[1], p.z[i] - p.z[j] - sh[2]);
+  fail(fmt::format("overlap {:.3g} m with particle {} is above 10 % of the smaller diameter",
+                   overlap, p.id[j]),
+       i);
+}
+
+void Engine::compute_forces(bool final_kick) {
+  Particles& p = particles_;
+  PairList& q = pairs_;
+  const PairCoefficients& c = coefficients_;
+  const std::size_t n = p.size();
+  const double dt = settings_.dt_s, half = 0.5 * dt;
+  const bool rolling = c.mu_roll > 0;
+  std::uint64_t large = 0;  // overlaps above 1 %: the threads add exactly (integers)
+  std::uint32_t bad_pair = UINT32_MAX, bad_wall_particle = UINT32_MAX;
+  row_sum_.resize(7 * n);
+  const std::size_t j_total = q.j_pairs.size();
+  constexpr std::size_t kPrefetchAhead = 16;
+  const double t0 = omp_get_wtime();
+  double t_pairs = 0.0;
+  const std::size_t wall_count = settings_.walls.size();
+  std::vector<Vec3> wall_point(wall_count), wall_velocity(wall_count);
+  std::vector<std::uint8_t> wall_plane(wall_count), wall_active(wall_count);
+  for (std::size_t w = 0; w < wall_count; ++w) {
+    const Wall& wall = settings_.walls[w];
+    wall_velocity[w] = wall.velocity_at(time_s_);
+    const Vec3 shift = wall.offset(time_s_);
+    for (int k = 0; k < 3; ++k) wall_point[w][k] = wall.point[k] + shift[k];
+    wall_plane[w] = wall.kind == WallKind::kPlane;
+    wall_active[w] = wall.active(time_s_);
+  }
+  // A particle's gather: its own row's sum, then the pairs where it is the j in pair order
+  // (fixed, so bit-identical for any thread count), walls, gravity, kick.
+  auto gather = [&](std::size_t a, std::uint64_t& large_here, std::uint32_t& bad_wall_here) {
+    const double* sum = &row_sum_[7 * a];
+    double fx = sum[0], fy = sum[1], fz = sum[2], tx = sum[3], ty = sum[4], tz = sum[5];
+    const double r = p.radius[a];
+    unsigned touching = static_cast<unsigned>(sum[6]);
+    const std::uint32_t e_end = q.j_offsets[a + 1];
+    for (std::uint32_t e = q.j_offsets[a]; e < e_end; ++e) {
+      const std::size_t k = q.j_pairs[e];
+      // The j-side slots were written by rows up to a layer of cells back (an L2 miss each):
+      // fetch those of the particles a few ahead.
+      if (e + kPrefetchAhead < j_total) {
+        __builtin_prefetch(&q.out[6 * std::size_t{q.j_pairs[e + kPrefetchAhead]}]);
+      }
+      const double* out = &q.out[6 * k];
+      fx -= out[0];
+      fy -= out[1];
+      fz -= out[2];
+      tx -= r * out[3];
+      ty -= r * out[4];
+      tz -= r * out[5];
+      if (rolling) {
+        tx -= q.roll[3 * k];
+        ty -= q.roll[3 * k + 1];
+        tz -= q.roll[3 * k + 2];
+      }
+      touching += (out[0] != 0.0) | (out[1] != 0.0) | (out[2] != 0.0);  // a non-zero force
+    }
+    for (std::size_t w = 0; w < wall_count; ++w) {
+      double* hx = &p.wall_spring[3 * w][a];
+      double* hy = &p.wall_spring[3 * w + 1][a];
+      double* hz = &p.wall_spring[3 * w + 2][a];
+      double dx, dy, dz;
+      bool any = wall_active[w];
+      if (wall_plane[w]) {  // inline: the distance along the normal, no closest point
+        const Vec3& o = wall_point[w];
+        const Vec3& nn = settings_.walls[w].normal;
+        const double along =
+            (p.x[a] - o[0]) * nn[0] + (p.y[a] - o[1]) * nn[1] + (p.z[a] - o[2]) * nn[2];
+        dx = along * nn[0];
+        dy = along * nn[1];
+        dz = along * nn[2];
+      } else {
+        Vec3 cp{};
+        any = closest_point(settings_.walls[w], time_s_, {p.x[a], p.y[a], p.z[a]}, cp);
+        dx = p.x[a] - cp[0];
+        dy = p.y[a] - cp[1];
+        dz = p.z[a] - cp[2];
+      }
+      const double rsq = dx * dx + dy * dy + dz * dz;
+      if (!any || rsq >= r * r || rsq == 0.0) {
+        *hx = *hy = *hz = 0.0;
+        continue;
+      }
+      const double dist = std::sqrt(rsq), inv = 1.0 / dist;
+      const double nx = dx * inv, ny = dy * inv, nz = dz * inv;
+      const double delta = r - dist;
+      large_here += delta > kWarnFraction * r;
+      if (delta > kFailFraction * r)
+        bad_wall_here = std::min(bad_wall_here, static_cast<std::uint32_t>(a));
+      const double m_star = p.mass[a];
+      const Vec3& wv = wall_velocity[w];
+      const double sx = r * p.pwx[a], sy = r * p.pwy[a], sz = r * p.pwz[a];
+      const double vx = p.pvx[a] - wv[0] - (sy * nz - sz * ny);
+      const double vy = p.pvy[a] - wv[1] - (sz * nx - sx * nz);
+      const double vz = p.pvz[a] - wv[2] - (sx * ny - sy * nx);
+      const double vn = vx * nx + vy * ny + vz * nz;
+      const double kn = c.k_abs + c.k_per_mass * m_star, cn = c.c_per_mass * m_star;
+      double fn = kn * delta - cn * vn;
+      if (c.clamp) fn = std::max(fn, 0.0);
+      const Tangential ft = tangential(nx, ny, nz, vx - vn * nx, vy - vn * ny, vz - vn * nz, fn,
+                                       c.kt_ratio * kn, c.ct_ratio * cn, c.mu, dt, *hx, *hy, *hz);
+      fx += fn * nx + ft.ftx;
+      fy += fn * ny + ft.fty;
+      fz += fn * nz + ft.ftz;
+      tx -= r * (ny * ft.ftz - nz * ft.fty);
+      ty -= r * (nz * ft.ftx - nx * ft.ftz);
+      tz -= r * (nx * ft.fty - ny * ft.ftx);
+      if (rolling) {
+        const double om =
+            std::sqrt(p.pwx[a] * p.pwx[a] + p.pwy[a] * p.pwy[a] + p.pwz[a] * p.pwz[a]);
+        const double s = om > 0 ? -c.mu_roll * fn * r / om : 0.0;
+        tx += s * p.pwx[a];
+        ty += s * p.pwy[a];
+        tz += s * p.pwz[a];
+      }
+      touching += fn > 0;
+    }
+    p.contacts[a] = static_cast<std::uint16_t>(touching);
+    p.force_magnitude[a] = std::sqrt(fx * fx + fy * fy + fz * fz);
+    const double mass = p.mass[a];
+    // Optional background drag (settling only): F = -c v with the synchronised velocity.
+    fx -= settings_.viscous_damping * p.pvx[a];
+    fy -= settings_.viscous_damping * p.pvy[a];
+    fz -= settings_.viscous_damping * p.pvz[a];
+    fx += mass * settings_.gravity[0];
+    fy += mass * settings_.gravity[1];
+    fz += mass * settings_.gravity[2];
+    p.fx[a] = fx;
+    p.fy[a] = fy;
+    p.fz[a] = fz;
+    p.tx[a] = tx;
+    p.ty[a] = ty;
+    p.tz[a] = tz;
+    if (final_kick) {
+      p.vx[a] += fx * p.inv_mass[a] * half;
+      p.vy[a] += fy * p.inv_mass[a] * half;
+      p.vz[a] += fz * p.inv_mass[a] * half;
+      p.wx[a] += tx * p.inv_inertia[a] * half;
+      p.wy[a] += ty * p.inv_inertia[a] * half;
+      p.wz[a] += tz * p.inv_inertia[a] * half;
+    }
+  };
+  auto gather_loop = [&] {  // the gather alone (for the phase split)
+    std::uint64_t large_here = 0;
+    std::uint32_t bad_wall_here = UINT32_MAX;
+#pragma omp for schedule(static)
+    for (std::size_t a = 0; a < n; ++a) gather(a, large_here, bad_wall_here);
+    detail::combine_counts(large_here, bad_wall_here, large, bad_wall_particle);
+  };
+  const double* kin = kin_.data();
+#pragma omp parallel num_threads(settings_.threads)
+  {
+    // The law's switches chosen at compile time.
+    if (settings_.fused_force_pass) {
+      if (rolling) {
+        c.clamp ? detail::fused_pass<true, true>(kin, n, q, c, dt, row_sum_, gather, large,
+                                                 bad_pair, bad_wall_particle)
+                : detail::fused_pass<true, false>(kin, n, q, c, dt, row_sum_, gather, large,
+                                                  bad_pair, bad_wall_particle);
+      } else {
+        c.clamp ? detail::fused_pass<false, true>(kin, n, q, c, dt, row_sum_, gather, large,
+                                                  bad_pair, bad_wall_particle)
+                : detail::fused_pass<false, false>(kin, n, q, c, dt, row_sum_, gather, large,
+                                                   bad_pair, bad_wall_particle);
+      }
+    } else {
+      if (rolling) {
+        c.clamp ? pair_rows<true, true>(kin, n, q, c, dt, row_sum_, large, bad_pair)
+                : pair_rows<true, false>(kin, n, q, c, dt, row_sum_, large, bad_pair);
+      } else {
+        c.clamp ? pair_rows<false, true>(kin, n, q, c, dt, row_sum_, large, bad_pair)
+                : pair_rows<false, false>(kin, n, q, c, dt, row_sum_, large, bad_pair);
+      }
+#pragma omp barrier
+#pragma omp single nowait
+      t_pairs = omp_get_wtime();
+      gather_loop();
+    }
+  }
+  if (settings_.fused_force_pass) t_pairs = omp_get_wtime();  // all of it counts as pair forces
+  const double t2 = omp_get_wtime();
+  phases_.pair_forces_s += t_pairs - t0;
+  phases_.walls_gather_s += t2 - t_pairs;
+  if (bad_pair != UINT32_MAX) check_pair_overlap(bad_pair);
+  if (bad_wall_particle != UINT32_MAX) {
+    fail("overlap with a wall above 10 % of the diameter", bad_wall_particle);
+  }
+  large_overlaps_ += large;
+  if (large > 0 && !warned_ && settings_.warn_large_overlaps) {
+    warned_ = true;
+    fmt::print(stderr,
+               "contactlab dem: warning: {} contacts overlap by more than 1 % of the smaller "
+               "diameter at step {} (warned once; the run's count is in the summary)\n",
+               large, step_);
+  }
+}
+
+Energies Engine::energies() const {
+  const Particles& p = particles_;
+  const PairCoefficients& c = coefficients_;
+  Energies e;
+  double elastic = 0.0;
+  for (std::size_t a = 0; a < p.size(); ++a) {
+    e.kinetic += 0.5 * p.mass[a] * (p.vx[a] * p.vx[a] + p.vy[a] * p.vy[a] + p.vz[a] * p.vz[a]);
+    e.kinetic +=
+        0.5 / p.inv_inertia[a] * (p.wx[a] * p.wx[a] + p.wy[a] * p.wy[a] + p.wz[a] * p.wz[a]);
+    e.potential -= p.mass[a] * (settings_.gravity[0] * p.x[a] + settings_.gravity[1] * p.y[a] +
+                                settings_.gravity[2] * p.z[a]);
+    for (std::size_t w = 0; w < settings_.walls.size(); ++w) {
+      Vec3 cp;
+      if (!closest_point(settings_.walls[w], time_s_, {p.x[a], p.y[a], p.z[a]}, cp)) continue;
+      const double delta = p.radius[a] - std::hypot(p.x[a] - cp[0], p.y[a] - cp[1], p.z[a] - cp[2]);
+      if (delta <= 0) continue;
+      const double kn = c.k_n(p.mass[a]);
+      const double h2 = p.wall_spring[3 * w][a] * p.wall_spring[3 * w][a] +
+                        p.wall_spring[3 * w + 1][a] * p.wall_spring[3 * w + 1][a] +
+                        p.wall_spring[3 * w + 2][a] * p.wall_spring[3 * w + 2][a];
+      elastic += 0.5 * kn * delta * delta + 0.5 * c.kt_ratio * kn * h2;
+    }
+  }
+  const PairList& q = pairs_;
+  for (std::size_t k = 0; k < q.size(); ++k) {
+    const std::uint32_t i = q.i[k], j = q.j[k];
+    const auto& sh = q.shift[q.image[k]];
+    const double delta =
+        p.radius[i] + p.radius[j] -
+        std::hypot(p.x[i] - p.x[j] - sh[0], p.y[i] - p.y[j] - sh[1], p.z[i] - p.z[j] - sh[2]);
+    if (delta <= 0) continue;
+    const double kn = c.k_n(p.mass[i] * p.mass[j] / (p.mass[i] + p.mass[j]));
+    const double h2 = q.hx[k] * q.hx[k] + q.hy[k] * q.hy[k] + q.hz[k] * q.hz[k];
+    elastic += 0.5 * kn * delta * delta + 0.5 * c.kt_ratio * kn * h2;
+  }
+  e.potential += elastic;
+  e.dissipated = initial_energy_ - (e.kinetic + e.potential);
+  return e;
+}
+
+void Engine::restore(const State& state, Particles particles, PairList pairs) {
+  time_s_ = state.time_s;
+  base_time_s_ = state.time_s;
+  base_step_ = state.step;
+  step_ = state.step;
+  rebuilds_ = state.rebuilds;
+  large_overlaps_ = state.large_overlaps;
+  initial_energy_ = state.initial_energy;
+  particles_ = std::move(particles);
+  const auto shift = pairs_.shift;
+  pairs_ = std::move(pairs);
+  pairs_.shift = shift;
+  pairs_.resize(pairs_.i.size(), coefficients_.mu_roll > 0);
+  pairs_.build_csr(particles_.size());
+  index_of_id_.assign(particles_.size(), 0);
+  for (std::size_t a = 0; a < particles_.size(); ++a)
+    index_of_id_[particles_.id[a]] = static_cast<std::uint32_t>(a);
+  refresh_kinematics();
+}
+
+}  // namespace contactlab::dem

@@ -1,0 +1,281 @@
+// Neighbour-list rebuild: periodic ghosts, the shared traversal, reorder by cell, history merge.
+#include "contactlab/dem/pair_list.hpp"
+
+#include <algorithm>
+#include <bit>
+#include <cmath>
+#include <string>
+
+#include "contactlab/kernels/error.hpp"
+#include "contactlab/kernels/variant.hpp"
+
+namespace contactlab::dem {
+
+void PairList::resize(std::size_t n, bool rolling) {
+  i.resize(n);
+  j.resize(n);
+  image.resize(n);
+  for (auto* v : {&hx, &hy, &hz}) v->resize(n);
+  out.resize(6 * n);
+  roll.resize(rolling ? 3 * n : 0);
+}
+
+void PairList::build_csr(std::size_t particles) {
+  // Orient every pair from the later particle to the earlier one (j < i), so that particle a's
+  // j sides all come from the rows (a, a + max_span]: the fused force pass gathers a as soon as
+  // those rows are done. A swapped pair's spring is seen from the other side (negated) and its
+  // image shift is negated (code 26 - code).
+  bool sorted = true;
+  for (std::size_t k = 0; k < size(); ++k) {
+    if (j[k] > i[k]) {
+      std::swap(i[k], j[k]);
+      image[k] = static_cast<std::uint8_t>(26 - image[k]);
+      hx[k] = -hx[k];
+      hy[k] = -hy[k];
+      hz[k] = -hz[k];
+    }
+    sorted = sorted && (k == 0 || i[k - 1] <= i[k]);
+  }
+  // Rows: grouped by i, ascending (a stable counting sort when the orientation broke it).
+  rows.assign(particles + 1, 0);
+  for (std::size_t k = 0; k < size(); ++k) ++rows[i[k] + 1];
+  for (std::size_t p = 0; p < particles; ++p) rows[p + 1] += rows[p];
+  if (!sorted) {
+    std::vector<std::uint32_t> at(rows.begin(), rows.end() - 1), order(size());
+    for (std::size_t k = 0; k < size(); ++k) order[at[i[k]]++] = static_cast<std::uint32_t>(k);
+    auto apply = [&](auto& v) {
+      auto copy = v;
+      for (std::size_t k = 0; k < size(); ++k) v[k] = copy[order[k]];
+    };
+    apply(i);
+    apply(j);
+    apply(image);
+    apply(hx);
+    apply(hy);
+    apply(hz);
+  }
+  max_span = 0;
+  for (std::size_t k = 0; k < size(); ++k) max_span = std::max<std::size_t>(max_span, i[k] - j[k]);
+  // The pairs where each particle is the j, in pair order.
+  j_offsets.assign(particles + 1, 0);
+  for (std::size_t k = 0; k < size(); ++k) ++j_offsets[j[k] + 1];
+  for (std::size_t p = 0; p < particles; ++p) j_offsets[p + 1] += j_offsets[p];
+  j_pairs.resize(j_offsets[particles]);
+  std::vector<std::uint32_t> next(j_offsets.begin(), j_offsets.end() - 1);
+  for (std::size_t k = 0; k < size(); ++k) j_pairs[next[j[k]]++] = static_cast<std::uint32_t>(k);
+}
+
+void radix_sort(std::vector<std::uint64_t>& keys, std::vector<std::uint32_t>& payload, int bits,
+                std::vector<std::uint64_t>& key_scratch,
+                std::vector<std::uint32_t>& payload_scratch) {
+  constexpr int kDigit = 11;
+  const std::size_t n = keys.size();
+  key_scratch.resize(n);
+  payload_scratch.resize(n);
+  std::vector<std::uint32_t> count(std::size_t{1} << kDigit);
+  for (int shift = 0; shift < bits; shift += kDigit) {
+    std::fill(count.begin(), count.end(), 0u);
+    for (std::size_t k = 0; k < n; ++k) ++count[(keys[k] >> shift) & ((1u << kDigit) - 1)];
+    std::uint32_t sum = 0;
+    for (auto& c : count) {
+      const std::uint32_t here = c;
+      c = sum;
+      sum += here;
+    }
+    for (std::size_t k = 0; k < n; ++k) {
+      const std::uint32_t at = count[(keys[k] >> shift) & ((1u << kDigit) - 1)]++;
+      key_scratch[at] = keys[k];
+      payload_scratch[at] = payload[k];
+    }
+    keys.swap(key_scratch);
+    payload.swap(payload_scratch);
+  }
+}
+
+namespace {
+
+// The pair key from lower to higher stable id, and the sign that turns a spring seen from i
+// into one seen from the lower id.
+std::uint64_t pair_key(std::uint32_t a, std::uint32_t b) {
+  return a < b ? (std::uint64_t{a} << 32 | b) : (std::uint64_t{b} << 32 | a);
+}
+
+}  // namespace
+
+RebuildStats NeighborBuilder::rebuild(Particles& p, PairList& pairs, const Domain& domain,
+                                      double skin, bool rolling) {
+  const std::size_t n = p.size();
+  RebuildStats stats;
+  // 1. The touching pairs' springs, keyed by stable ids (oriented from the lower id).
+  old_keys_.clear();
+  old_payload_.clear();
+  old_spring_.clear();
+  for (std::size_t k = 0; k < pairs.size(); ++k) {
+    if (pairs.hx[k] == 0.0 && pairs.hy[k] == 0.0 && pairs.hz[k] == 0.0) continue;
+    const std::uint32_t a = p.id[pairs.i[k]], b = p.id[pairs.j[k]];
+    const double sign = a < b ? 1.0 : -1.0;
+    old_keys_.push_back(pair_key(a, b));
+    old_payload_.push_back(static_cast<std::uint32_t>(old_spring_.size() / 3));
+    old_spring_.insert(old_spring_.end(),
+                       {sign * pairs.hx[k], sign * pairs.hy[k], sign * pairs.hz[k]});
+  }
+
+  // 2. Wrap periodic positions, and add ghosts: images within reach of a periodic face.
+  double max_r = 0.0;
+  for (double r : p.radius) max_r = std::max(max_r, r);
+  const double reach = 2.0 * max_r + skin;
+  for (int a = 0; a < 3; ++a) {
+    if (!domain.periodic[a]) continue;
+    if (domain.length(a) < 3.0 * reach) {
+      throw InputError("periodic length along axis " + std::to_string(a) + " (" +
+                       std::to_string(domain.length(a)) + " m) is under 3 pair reaches (" +
+                       std::to_string(3.0 * reach) + " m)");
+    }
+    std::vector<double>& c = a == 0 ? p.x : a == 1 ? p.y : p.z;
+    const double lo = domain.lo[a], len = domain.length(a);
+    for (std::size_t k = 0; k < n; ++k) {
+      const double wrapped = c[k] - len * std::floor((c[k] - lo) / len);
+      c[k] = wrapped < domain.hi[a] ? wrapped : lo;
+    }
+  }
+  // Displacements are measured from here on.
+  p.x0.assign(p.x.begin(), p.x.end());
+  p.y0.assign(p.y.begin(), p.y.end());
+  p.z0.assign(p.z.begin(), p.z.end());
+  for (int a = 0; a < 3; ++a) {
+    std::array<double, 3> s{0, 0, 0};
+    s[a] = domain.length(a);
+    for (int code = 0; code < 27; ++code) {
+      const int im = a == 0 ? code % 3 : a == 1 ? (code / 3) % 3 : code / 9;
+      pairs.shift[code][a] = (im - 1) * s[a];
+    }
+  }
+  scene_.x.assign(p.x.begin(), p.x.end());
+  scene_.y.assign(p.y.begin(), p.y.end());
+  scene_.z.assign(p.z.begin(), p.z.end());
+  scene_.diameter.resize(n);
+  for (std::size_t k = 0; k < n; ++k) scene_.diameter[k] = 2.0 * p.radius[k];
+  ghost_owner_.clear();
+  ghost_image_.clear();
+  const bool any_periodic = domain.periodic[0] || domain.periodic[1] || domain.periodic[2];
+  for (std::size_t k = 0; any_periodic && k < n; ++k) {
+    const double pos[3] = {p.x[k], p.y[k], p.z[k]};
+    int options[3][2];  // per axis: the images to try (0 = none)
+    int counts[3];
+    for (int a = 0; a < 3; ++a) {
+      counts[a] = 1;
+      options[a][0] = 0;
+      if (!domain.periodic[a]) continue;
+      if (pos[a] - domain.lo[a] < reach)
+        options[a][counts[a]++] = 1;
+      else if (domain.hi[a] - pos[a] < reach)
+        options[a][counts[a]++] = -1;
+    }
+    for (int ax = 0; ax < counts[0]; ++ax) {
+      for (int ay = 0; ay < counts[1]; ++ay) {
+        for (int az = 0; az < counts[2]; ++az) {
+          if (ax == 0 && ay == 0 && az == 0) continue;
+          const int ix = options[0][ax], iy = options[1][ay], iz = options[2][az];
+          scene_.x.push_back(pos[0] + ix * domain.length(0));
+          scene_.y.push_back(pos[1] + iy * domain.length(1));
+          scene_.z.push_back(pos[2] + iz * domain.length(2));
+          scene_.diameter.push_back(2.0 * p.radius[k]);
+          ghost_owner_.push_back(static_cast<std::uint32_t>(k));
+          ghost_image_.push_back(static_cast<std::uint8_t>((ix + 1) + 3 * (iy + 1) + 9 * (iz + 1)));
+        }
+      }
+    }
+  }
+  stats.ghosts = ghost_owner_.size();
+  Box box;
+  for (int a = 0; a < 3; ++a) {
+    const std::vector<double>& c = a == 0 ? scene_.x : a == 1 ? scene_.y : scene_.z;
+    const auto [mn, mx] = std::minmax_element(c.begin(), c.end());
+    box.lo[a] = *mn - reach;
+    box.hi[a] = *mx + reach;
+  }
+  scene_.box = box;
+
+  // 3. Pairs within r_i + r_j + skin from the shared traversal (serial: a rebuild is rare and
+  //    its order must not depend on threads; rows come out canonical anyway).
+  DetectOptions options{parse_variant("particle/sorted/full/static"), 0.0, 1, nullptr};
+  options.homes = HomeRange{0, static_cast<std::uint32_t>(n)};
+  const ContactList list = detector_.neighbor_list(scene_, options, skin);
+
+  // 4. The new order: owned particles in cell (slot) order.
+  order_.clear();
+  for (std::uint32_t input : detector_.working_to_input()) {
+    if (input < n) order_.push_back(input);
+  }
+  new_index_.resize(n);
+  for (std::size_t a = 0; a < n; ++a) new_index_[order_[a]] = static_cast<std::uint32_t>(a);
+  p.permute(order_);
+
+  pairs.i.clear();
+  pairs.j.clear();
+  pairs.image.clear();
+  for (std::size_t a = 0; a < n; ++a) {
+    const std::uint32_t old = order_[a];
+    for (std::uint32_t q : list.partners_of(old)) {
+      if (q < n) {
+        pairs.i.push_back(static_cast<std::uint32_t>(a));
+        pairs.j.push_back(new_index_[q]);
+        pairs.image.push_back(kNoImage);
+        continue;
+      }
+      const std::uint32_t owner = ghost_owner_[q - n];
+      if (owner <= old) continue;  // each periodic pair once, from its lower input row
+      pairs.i.push_back(static_cast<std::uint32_t>(a));
+      pairs.j.push_back(new_index_[owner]);
+      pairs.image.push_back(ghost_image_[q - n]);
+    }
+  }
+  const std::size_t count = pairs.i.size();
+  pairs.resize(count, rolling);
+  std::fill(pairs.hx.begin(), pairs.hx.end(), 0.0);
+  std::fill(pairs.hy.begin(), pairs.hy.end(), 0.0);
+  std::fill(pairs.hz.begin(), pairs.hz.end(), 0.0);
+  stats.pairs = count;
+
+  // 5. Merge the old springs into the new list by sorted keys: O(pairs) radix sorts.
+  if (!old_keys_.empty()) {
+    new_keys_.resize(count);
+    new_payload_.resize(count);
+    for (std::size_t k = 0; k < count; ++k) {
+      new_keys_[k] = pair_key(p.id[pairs.i[k]], p.id[pairs.j[k]]);
+      new_payload_[k] = static_cast<std::uint32_t>(k);
+    }
+    std::uint32_t max_id = 0;
+    for (std::uint32_t v : p.id) max_id = std::max(max_id, v);
+    const int id_bits = std::max(1, static_cast<int>(std::bit_width(max_id)));
+    // Keys are lo << 32 | hi: sort the low id_bits of each half (two rounds over the key).
+    auto sort_keys = [&](std::vector<std::uint64_t>& keys, std::vector<std::uint32_t>& payload) {
+      for (auto& key : keys) key = (key >> 32) << id_bits | (key & 0xffffffffu);
+      radix_sort(keys, payload, 2 * id_bits, scratch_keys_, scratch_payload_);
+    };
+    sort_keys(old_keys_, old_payload_);
+    sort_keys(new_keys_, new_payload_);
+    std::size_t a = 0;
+    for (std::size_t b = 0; a < old_keys_.size() && b < count;) {
+      if (old_keys_[a] < new_keys_[b]) {
+        ++a;
+      } else if (new_keys_[b] < old_keys_[a]) {
+        ++b;
+      } else {
+        const std::uint32_t k = new_payload_[b];
+        const double sign = p.id[pairs.i[k]] < p.id[pairs.j[k]] ? 1.0 : -1.0;
+        const double* s = &old_spring_[3 * std::size_t{old_payload_[a]}];
+        pairs.hx[k] = sign * s[0];
+        pairs.hy[k] = sign * s[1];
+        pairs.hz[k] = sign * s[2];
+        ++stats.carried_contacts;
+        ++a;
+        ++b;
+      }
+    }
+  }
+  pairs.build_csr(n);
+  return stats;
+}
+
+}  // namespace contactlab::dem

@@ -1,0 +1,116 @@
+// Particle arrays: growth and permutation.
+#include "contactlab/dem/particles.hpp"
+
+#include <numbers>
+
+namespace contactlab::dem {
+namespace {
+
+template <class T>
+void permute_one(std::vector<T>& v, std::span<const std::uint32_t> order, std::vector<T>& scratch) {
+  scratch.resize(v.size());
+  for (std::size_t a = 0; a < order.size(); ++a) scratch[a] = v[order[a]];
+  v.swap(scratch);
+}
+
+}  // namespace
+
+void Particles::resize(std::size_t n) {
+  id.resize(n);
+  material.resize(n);
+  contacts.resize(n);
+  for (auto* v : {&x,
+                  &y,
+                  &z,
+                  &vx,
+                  &vy,
+                  &vz,
+                  &wx,
+                  &wy,
+                  &wz,
+                  &pvx,
+                  &pvy,
+                  &pvz,
+                  &pwx,
+                  &pwy,
+                  &pwz,
+                  &fx,
+                  &fy,
+                  &fz,
+                  &tx,
+                  &ty,
+                  &tz,
+                  &radius,
+                  &mass,
+                  &inv_mass,
+                  &inv_inertia,
+                  &x0,
+                  &y0,
+                  &z0,
+                  &force_magnitude}) {
+    v->resize(n, 0.0);
+  }
+  for (auto& v : wall_spring) v.resize(n, 0.0);
+}
+
+void Particles::set_wall_count(std::size_t walls) {
+  wall_spring.assign(3 * walls, std::vector<double>(size(), 0.0));
+}
+
+void Particles::add(std::uint32_t stable_id, std::uint16_t material_index, double px, double py,
+                    double pz, double r, double density) {
+  const std::size_t i = size();
+  resize(i + 1);
+  id[i] = stable_id;
+  material[i] = material_index;
+  x[i] = x0[i] = px;
+  y[i] = y0[i] = py;
+  z[i] = z0[i] = pz;
+  radius[i] = r;
+  mass[i] = density * 4.0 / 3.0 * std::numbers::pi * r * r * r;
+  inv_mass[i] = 1.0 / mass[i];
+  inv_inertia[i] = 1.0 / (0.4 * mass[i] * r * r);
+}
+
+void Particles::permute(std::span<const std::uint32_t> order) {
+  std::vector<std::uint32_t> s32;
+  permute_one(id, order, s32);
+  std::vector<std::uint16_t> s16;
+  permute_one(material, order, s16);
+  permute_one(contacts, order, s16);
+  std::vector<double> sd;
+  for (auto* v : {&x,
+                  &y,
+                  &z,
+                  &vx,
+                  &vy,
+                  &vz,
+                  &wx,
+                  &wy,
+                  &wz,
+                  &pvx,
+                  &pvy,
+                  &pvz,
+                  &pwx,
+                  &pwy,
+                  &pwz,
+                  &fx,
+                  &fy,
+                  &fz,
+                  &tx,
+                  &ty,
+                  &tz,
+                  &radius,
+                  &mass,
+                  &inv_mass,
+                  &inv_inertia,
+                  &x0,
+                  &y0,
+                  &z0,
+                  &force_magnitude}) {
+    permute_one(*v, order, sd);
+  }
+  for (auto& v : wall_spring) permute_one(v, order, sd);
+}
+
+}  // namespace contactlab::dem

@@ -1,0 +1,198 @@
+// The engine's guarantees: bit-identical trajectories for any thread count, contact history
+// carried across rebuilds and reorders, the synchronised velocity removing the dashpot's
+// half-step bias, energy bookkeeping.
+#include <gtest/gtest.h>
+#include <omp.h>
+
+#include <cmath>
+#include <numbers>
+#include <vector>
+
+#include "contactlab/dem/contact_law.hpp"
+#include "contactlab/dem/engine.hpp"
+#include "contactlab/dem/validation.hpp"
+#include "contactlab/kernels/error.hpp"
+#include "dem_support.hpp"
+
+namespace contactlab::dem {
+namespace {
+
+TEST(DemEngine, BitIdenticalForAnyThreadCount) {
+  auto [settings, particles] = test::small_bed();
+  std::vector<double> reference;
+  for (const int threads : {1, 2, 3}) {
+    EngineSettings s = settings;
+    s.threads = threads;
+    Engine engine(s, particles);
+    engine.run_steps(1500);
+    EXPECT_GT(engine.rebuilds(), 1u);
+    const std::vector<double> state = test::state_by_id(engine);
+    if (reference.empty()) {
+      reference = state;
+    } else {
+      EXPECT_TRUE(test::bitwise_equal(reference, state)) << threads << " threads";
+    }
+  }
+}
+
+// The fused pass (each particle gathered as soon as its rows are done) and the split one (pair
+// loop, then gather) give the same bits, at any thread count.
+TEST(DemEngine, FusedAndSplitForcePassesAgree) {
+  auto [settings, particles] = test::small_bed();
+  std::vector<double> reference;
+  for (const bool fused : {true, false}) {
+    for (const int threads : {1, 3}) {
+      EngineSettings s = settings;
+      s.fused_force_pass = fused;
+      s.threads = threads;
+      Engine engine(s, particles);
+      engine.run_steps(800);
+      const std::vector<double> state = test::state_by_id(engine);
+      if (reference.empty()) {
+        reference = state;
+      } else {
+        EXPECT_TRUE(test::bitwise_equal(reference, state)) << fused << " " << threads;
+      }
+    }
+  }
+}
+
+TEST(DemEngine, BitIdenticalForAnySchedule) {
+  auto [settings, particles] = test::small_bed(60);
+  settings.threads = 2;
+  Engine a(settings, particles);
+  a.run_steps(200);
+  omp_set_schedule(omp_sched_dynamic, 3);  // the engine's loops are static: no effect allowed
+  Engine b(settings, particles);
+  b.run_steps(200);
+  omp_set_schedule(omp_sched_static, 0);
+  EXPECT_TRUE(test::bitwise_equal(test::state_by_id(a), test::state_by_id(b)));
+}
+
+// A frictional contact that lasts across many rebuilds (a tiny skin forces them) gives the
+// same motion as with a skin so large that the list is never rebuilt: the tangential spring
+// survives each rebuild and reorder.
+TEST(DemEngine, HistorySurvivesRebuildsAndReorders) {
+  auto run = [](double skin) {
+    EngineSettings s;
+    s.law.restitution = 0.5;
+    s.law.contact_time_s = 1e-4;
+    s.law.friction = 0.8;
+    s.gravity = {0, 0, -9.81};
+    s.dt_s = 2e-6;
+    s.skin = skin;
+    s.warn_large_overlaps = false;
+    s.domain.lo = {-1, -1, -1};
+    s.domain.hi = {1, 1, 1};
+    Wall floor;
+    floor.name = "floor";
+    s.walls.push_back(floor);
+    Particles p;
+    // A leaning two-sphere stack: the upper one (id 0, later in cell order, so a rebuild
+    // reorders them) rests off-centre on the lower one, loading the pair's tangential spring.
+    const double offset = 0.3e-3;
+    p.add(0, 0, offset, 0, 1e-3 + std::sqrt(4e-6 - offset * offset) - 1e-6, 1e-3, 2500);
+    p.add(1, 0, 0, 0, 1e-3, 1e-3, 2500);
+    p.vx[0] = 0.2;
+    p.vx[1] = 0.2;
+    Engine engine(s, p);
+    engine.run_steps(3000);
+    return std::pair{test::state_by_id(engine), engine.rebuilds()};
+  };
+  const auto [often, rebuilds_often] = run(1e-6);
+  const auto [never, rebuilds_never] = run(0.5);
+  EXPECT_GT(rebuilds_often, 50u);
+  EXPECT_EQ(rebuilds_never, 1u);
+  ASSERT_EQ(often.size(), never.size());
+  for (std::size_t k = 0; k < often.size(); ++k) {
+    EXPECT_NEAR(often[k], never[k], 1e-9 * (1 + std::abs(never[k]))) << "component " << k;
+  }
+}
+
+// The dashpot fed half-step velocities biases e by O(dt/t_c); synchronised ones converge
+// faster. Each e is averaged over first-touch phases (the jump of the dashpot force at the first
+// touch is an O(dt) error of either sign that depends on where in a step the touch falls).
+TEST(DemEngine, SynchronisedVelocityRemovesHalfStepBias) {
+  ContactLaw law;
+  law.restitution = 0.5;
+  law.contact_time_s = 1e-4;
+  law.friction = 0;
+  const double m = 2500 * 4.0 / 3.0 * std::numbers::pi * 1e-9;
+  const double expected = predict_impact(pair_coefficients(law), 0.5 * m).restitution;
+  std::vector<double> sync_error, half_error;
+  for (const double divisor : {50.0, 100.0, 200.0}) {
+    const double dt = 1e-4 / divisor;
+    sync_error.push_back(
+        std::abs(mean_restitution(law, 1e-3, 1e-3, 2500, 0.1, dt, VelocityInForces::kSynchronised) -
+                 expected));
+    half_error.push_back(std::abs(
+        mean_restitution(law, 1e-3, 1e-3, 2500, 0.1, dt, VelocityInForces::kHalfStep) - expected));
+    EXPECT_LT(sync_error.back(), half_error.back()) << "t_c/" << divisor;
+  }
+  for (std::size_t k = 0; k + 1 < half_error.size(); ++k) {
+    // First order: halving dt halves the half-step bias; the synchronised error falls faster.
+    EXPECT_NEAR(half_error[k] / half_error[k + 1], 2.0, 0.4);
+    EXPECT_GT(sync_error[k] / sync_error[k + 1], half_error[k] / half_error[k + 1]);
+  }
+}
+
+TEST(DemEngine, EnergyBalanceOfAFallingBed) {
+  auto [settings, particles] = test::small_bed(60);
+  Engine engine(settings, particles);
+  const Energies e0 = engine.energies();
+  EXPECT_NEAR(e0.dissipated, 0.0, 1e-18);
+  engine.run_steps(2000);
+  const Energies e1 = engine.energies();
+  EXPECT_GT(e1.dissipated, 0.0);  // e < 1 and friction only remove energy
+  EXPECT_NEAR(e1.kinetic + e1.potential + e1.dissipated, e0.kinetic + e0.potential,
+              1e-12 * (e0.kinetic + std::abs(e0.potential)));
+}
+
+TEST(DemEngine, RefusesInitialOverlapsAndUnstableSteps) {
+  auto [settings, particles] = test::small_bed(20);
+  Particles overlapping = particles;
+  overlapping.x[1] = overlapping.x[0] + overlapping.radius[0];  // deep overlap
+  overlapping.y[1] = overlapping.y[0];
+  overlapping.z[1] = overlapping.z[0];
+  EXPECT_THROW(Engine engine(settings, overlapping), InputError);
+  Particles in_floor = particles;
+  in_floor.z[3] = 0.5 * in_floor.radius[3];
+  EXPECT_THROW(Engine engine(settings, in_floor), InputError);
+  EngineSettings big_dt = settings;
+  big_dt.dt_s = 1e-4;
+  try {
+    Engine engine(big_dt, particles);
+    FAIL() << "dt above the limit accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("stable limit"), std::string::npos) << e.what();
+  }
+}
+
+TEST(DemContactLaw, ClampPredictionMatchesTheOdeSolvedFinely) {
+  // Integrate x'' = -(k x + c x')/m* with the force clamped at 0 by RK4 at t_c/1e5.
+  for (const double e : {0.1, 0.5, 0.9}) {
+    ContactLaw law;
+    law.restitution = e;
+    law.contact_time_s = 1.0;
+    const PairCoefficients c = pair_coefficients(law);
+    const double m = 1.0, k = c.k_n(m), damp = c.c_n(m);
+    double x = 0, v = 1, t = 0;
+    const double h = 1e-5;
+    auto acc = [&](double xx, double vv) { return -std::max(0.0, k * xx + damp * vv) / m; };
+    while (t < 2.0) {
+      const double a1 = acc(x, v), k1x = v;
+      const double a2 = acc(x + 0.5 * h * k1x, v + 0.5 * h * a1), k2x = v + 0.5 * h * a1;
+      const double a3 = acc(x + 0.5 * h * k2x, v + 0.5 * h * a2), k3x = v + 0.5 * h * a2;
+      const double a4 = acc(x + h * k3x, v + h * a3), k4x = v + h * a3;
+      x += h / 6 * (k1x + 2 * k2x + 2 * k3x + k4x);
+      v += h / 6 * (a1 + 2 * a2 + 2 * a3 + a4);
+      t += h;
+      if (x <= 0) break;
+    }
+    EXPECT_NEAR(-v, predict_impact(c, m).restitution, 1e-4) << "e = " << e;
+    EXPECT_GT(predict_impact(c, m).restitution, e);
+  }
+}
+
+}  // namespace
+}  // namespace contactlab::dem
