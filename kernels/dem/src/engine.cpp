@@ -207,8 +207,7 @@ void Engine::compute_forces(bool final_kick) {
   std::uint64_t large = 0;  // overlaps above 1 %: the threads add exactly (integers)
   std::uint32_t bad_pair = UINT32_MAX, bad_wall_particle = UINT32_MAX;
   row_sum_.resize(7 * n);
-  const std::size_t j_total = q.j_pairs.size();
-  constexpr std::size_t kPrefetchAhead = 16;
+  constexpr std::size_t kPrefetchAhead = 8;
   const double t0 = omp_get_wtime();
   double t_pairs = 0.0;
   const std::size_t wall_count = settings_.walls.size();
@@ -227,17 +226,24 @@ void Engine::compute_forces(bool final_kick) {
   auto gather = [&](std::size_t a, std::uint64_t& large_here, std::uint32_t& bad_wall_here) {
     const double* sum = &row_sum_[7 * a];
     double fx = sum[0], fy = sum[1], fz = sum[2], tx = sum[3], ty = sum[4], tz = sum[5];
-    const double r = p.radius[a];
+    // a's position, radius, mass and synchronised velocities from its kin_ block (one or two
+    // cache lines, not nine arrays); the same values as the particle arrays.
+    const double* ka = &kin_[kKinStride * a];
+    const double xa = ka[0], ya = ka[1], za = ka[2], r = ka[3], mass = ka[7];
+    const double pvxa = ka[4], pvya = ka[5], pvza = ka[6], pwxa = ka[8], pwya = ka[9],
+                 pwza = ka[10];
     unsigned touching = static_cast<unsigned>(sum[6]);
-    const std::uint32_t e_end = q.j_offsets[a + 1];
-    for (std::uint32_t e = q.j_offsets[a]; e < e_end; ++e) {
-      const std::size_t k = q.j_pairs[e];
-      // The j-side slots were written by rows up to a layer of cells back (an L2 miss each):
-      // fetch those of the particles a few ahead.
-      if (e + kPrefetchAhead < j_total) {
-        __builtin_prefetch(&q.out[6 * std::size_t{q.j_pairs[e + kPrefetchAhead]}]);
-      }
-      const double* out = &q.out[6 * k];
+    // The j sides in pair order, contiguous (each row wrote its j side into a's slots).
+    // The slots of the particles a few ahead are the next cache misses (written by rows up to
+    // a layer of cells back): start fetching them now.
+    if (a + kPrefetchAhead < n) {
+      const double* ahead = &q.out[6 * std::size_t{q.j_offsets[a + kPrefetchAhead]}];
+      __builtin_prefetch(ahead);
+      __builtin_prefetch(ahead + 8);
+      __builtin_prefetch(ahead + 16);
+    }
+    for (std::size_t e = q.j_offsets[a]; e < q.j_offsets[a + 1]; ++e) {
+      const double* out = &q.out[6 * e];
       fx -= out[0];
       fy -= out[1];
       fz -= out[2];
@@ -245,9 +251,9 @@ void Engine::compute_forces(bool final_kick) {
       ty -= r * out[4];
       tz -= r * out[5];
       if (rolling) {
-        tx -= q.roll[3 * k];
-        ty -= q.roll[3 * k + 1];
-        tz -= q.roll[3 * k + 2];
+        tx -= q.roll[3 * e];
+        ty -= q.roll[3 * e + 1];
+        tz -= q.roll[3 * e + 2];
       }
       touching += (out[0] != 0.0) | (out[1] != 0.0) | (out[2] != 0.0);  // a non-zero force
     }
@@ -260,17 +266,16 @@ void Engine::compute_forces(bool final_kick) {
       if (wall_plane[w]) {  // inline: the distance along the normal, no closest point
         const Vec3& o = wall_point[w];
         const Vec3& nn = settings_.walls[w].normal;
-        const double along =
-            (p.x[a] - o[0]) * nn[0] + (p.y[a] - o[1]) * nn[1] + (p.z[a] - o[2]) * nn[2];
+        const double along = (xa - o[0]) * nn[0] + (ya - o[1]) * nn[1] + (za - o[2]) * nn[2];
         dx = along * nn[0];
         dy = along * nn[1];
         dz = along * nn[2];
       } else {
         Vec3 cp{};
-        any = closest_point(settings_.walls[w], time_s_, {p.x[a], p.y[a], p.z[a]}, cp);
-        dx = p.x[a] - cp[0];
-        dy = p.y[a] - cp[1];
-        dz = p.z[a] - cp[2];
+        any = closest_point(settings_.walls[w], time_s_, {xa, ya, za}, cp);
+        dx = xa - cp[0];
+        dy = ya - cp[1];
+        dz = za - cp[2];
       }
       const double rsq = dx * dx + dy * dy + dz * dz;
       if (!any || rsq >= r * r || rsq == 0.0) {
@@ -283,12 +288,12 @@ void Engine::compute_forces(bool final_kick) {
       large_here += delta > kWarnFraction * r;
       if (delta > kFailFraction * r)
         bad_wall_here = std::min(bad_wall_here, static_cast<std::uint32_t>(a));
-      const double m_star = p.mass[a];
+      const double m_star = mass;
       const Vec3& wv = wall_velocity[w];
-      const double sx = r * p.pwx[a], sy = r * p.pwy[a], sz = r * p.pwz[a];
-      const double vx = p.pvx[a] - wv[0] - (sy * nz - sz * ny);
-      const double vy = p.pvy[a] - wv[1] - (sz * nx - sx * nz);
-      const double vz = p.pvz[a] - wv[2] - (sx * ny - sy * nx);
+      const double sx = r * pwxa, sy = r * pwya, sz = r * pwza;
+      const double vx = pvxa - wv[0] - (sy * nz - sz * ny);
+      const double vy = pvya - wv[1] - (sz * nx - sx * nz);
+      const double vz = pvza - wv[2] - (sx * ny - sy * nx);
       const double vn = vx * nx + vy * ny + vz * nz;
       const double kn = c.k_abs + c.k_per_mass * m_star, cn = c.c_per_mass * m_star;
       double fn = kn * delta - cn * vn;
@@ -302,22 +307,20 @@ void Engine::compute_forces(bool final_kick) {
       ty -= r * (nz * ft.ftx - nx * ft.ftz);
       tz -= r * (nx * ft.fty - ny * ft.ftx);
       if (rolling) {
-        const double om =
-            std::sqrt(p.pwx[a] * p.pwx[a] + p.pwy[a] * p.pwy[a] + p.pwz[a] * p.pwz[a]);
+        const double om = std::sqrt(pwxa * pwxa + pwya * pwya + pwza * pwza);
         const double s = om > 0 ? -c.mu_roll * fn * r / om : 0.0;
-        tx += s * p.pwx[a];
-        ty += s * p.pwy[a];
-        tz += s * p.pwz[a];
+        tx += s * pwxa;
+        ty += s * pwya;
+        tz += s * pwza;
       }
       touching += fn > 0;
     }
     p.contacts[a] = static_cast<std::uint16_t>(touching);
     p.force_magnitude[a] = std::sqrt(fx * fx + fy * fy + fz * fz);
-    const double mass = p.mass[a];
     // Optional background drag (settling only): F = -c v with the synchronised velocity.
-    fx -= settings_.viscous_damping * p.pvx[a];
-    fy -= settings_.viscous_damping * p.pvy[a];
-    fz -= settings_.viscous_damping * p.pvz[a];
+    fx -= settings_.viscous_damping * pvxa;
+    fy -= settings_.viscous_damping * pvya;
+    fz -= settings_.viscous_damping * pvza;
     fx += mass * settings_.gravity[0];
     fy += mass * settings_.gravity[1];
     fz += mass * settings_.gravity[2];

@@ -20,6 +20,8 @@ constexpr double kWarnFraction = 0.02, kFailFraction = 0.2;
 // What the pair loop reads of a particle, side by side (one or two cache lines per partner
 // instead of one per array): x, y, z, r, pvx, pvy, pvz, m, pwx, pwy, pwz, unused.
 constexpr std::size_t kKinStride = 12;
+// How many pairs ahead the pair loop prefetches its partner's block.
+constexpr std::size_t kPartnerAhead = 6;
 
 // The tangential part of the law for one contact (pair or wall), LAMMPS gran/hooke/history
 // with the stored spring projected first: xi <- xi - (xi.n) n; xi += v_t dt; F_t = -k_t xi -
@@ -64,17 +66,22 @@ inline void row_forces(std::size_t i, const double* kin, PairList& q, const Pair
   const double xi = ki[0], yi = ki[1], zi = ki[2], ri = ki[3], mi = ki[7];
   const double pvxi = ki[4], pvyi = ki[5], pvzi = ki[6];
   const double pwxi = ki[8], pwyi = ki[9], pwzi = ki[10];
+  const std::size_t pairs = q.j.size();
   for (std::uint32_t k = q.rows[i]; k < q.rows[i + 1]; ++k) {
+    // Partners lie up to two layers of cells back (mostly L2, out of reach of the hardware
+    // prefetcher): fetch the block of the partner a few pairs ahead.
+    if (k + kPartnerAhead < pairs) __builtin_prefetch(&kin[kKinStride * q.j[k + kPartnerAhead]]);
     const double* kj = &kin[kKinStride * q.j[k]];
     const auto& sh = q.shift[q.image[k]];
     const double dx = xi - kj[0] - sh[0], dy = yi - kj[1] - sh[1], dz = zi - kj[2] - sh[2];
     const double rj = kj[3], rr = ri + rj;
     const double rsq = dx * dx + dy * dy + dz * dz;
-    double* out = &q.out[6 * std::size_t{k}];
+    const std::size_t slot = q.j_slot[k];
+    double* out = &q.out[6 * slot];
     if (rsq >= rr * rr) {
       q.hx[k] = q.hy[k] = q.hz[k] = 0.0;
       out[0] = out[1] = out[2] = out[3] = out[4] = out[5] = 0.0;
-      if constexpr (kRolling) q.roll[3 * k] = q.roll[3 * k + 1] = q.roll[3 * k + 2] = 0.0;
+      if constexpr (kRolling) q.roll[3 * slot] = q.roll[3 * slot + 1] = q.roll[3 * slot + 2] = 0.0;
       continue;
     }
     const double dist = std::sqrt(rsq), inv = 1.0 / dist;
@@ -119,9 +126,9 @@ inline void row_forces(std::size_t i, const double* kin, PairList& q, const Pair
       const double ox = pwxi - kj[8], oy = pwyi - kj[9], oz = pwzi - kj[10];
       const double om = std::sqrt(ox * ox + oy * oy + oz * oz);
       const double s = om > 0 ? -c.mu_roll * fn * (ri * rj / rr) / om : 0.0;
-      q.roll[3 * k] = s * ox;
-      q.roll[3 * k + 1] = s * oy;
-      q.roll[3 * k + 2] = s * oz;
+      q.roll[3 * slot] = s * ox;
+      q.roll[3 * slot + 1] = s * oy;
+      q.roll[3 * slot + 2] = s * oz;
       tx += s * ox;
       ty += s * oy;
       tz += s * oz;

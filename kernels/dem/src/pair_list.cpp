@@ -62,7 +62,11 @@ void PairList::build_csr(std::size_t particles) {
   for (std::size_t p = 0; p < particles; ++p) j_offsets[p + 1] += j_offsets[p];
   j_pairs.resize(j_offsets[particles]);
   std::vector<std::uint32_t> next(j_offsets.begin(), j_offsets.end() - 1);
-  for (std::size_t k = 0; k < size(); ++k) j_pairs[next[j[k]]++] = static_cast<std::uint32_t>(k);
+  j_slot.resize(size());
+  for (std::size_t k = 0; k < size(); ++k) {
+    j_slot[k] = next[j[k]];
+    j_pairs[next[j[k]]++] = static_cast<std::uint32_t>(k);
+  }
 }
 
 void radix_sort(std::vector<std::uint64_t>& keys, std::vector<std::uint32_t>& payload, int bits,
