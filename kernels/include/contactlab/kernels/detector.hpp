@@ -77,13 +77,41 @@ struct HomeRange {
   bool covers(std::uint32_t n) const { return first == 0 && last >= n; }
 };
 
+// The detection loop's iterations one process visits when several share the loop (the paper's
+// replicated MPI): blocks of `block` consecutive iterations (working ids for the particle loop,
+// i.e. reordered particles with the sorted orders; cell keys for the cell loop) dealt
+// round-robin to `count` processes, this one being `index`. block = 0: every iteration. The
+// threads of the process share its iterations with the variant's schedule.
+struct HomeBlocks {
+  std::uint32_t block = 0;
+  std::uint32_t count = 1;
+  std::uint32_t index = 0;
+  bool all() const { return block == 0 || count <= 1; }
+  // How many of the iterations [0, total) are this process's.
+  std::uint64_t size(std::uint64_t total) const {
+    if (all()) return total;
+    const std::uint64_t round = std::uint64_t{block} * count;
+    const std::uint64_t full = total / round;
+    const std::uint64_t rest = total - full * round;
+    const std::uint64_t start = std::uint64_t{index} * block;
+    const std::uint64_t tail = rest > start ? std::min<std::uint64_t>(rest - start, block) : 0;
+    return full * block + tail;
+  }
+  // The k-th of them.
+  std::uint64_t at(std::uint64_t k) const {
+    if (all()) return k;
+    return (k / block) * block * count + std::uint64_t{index} * block + k % block;
+  }
+};
+
 struct DetectOptions {
   Variant variant;
   // Contact diameter D for scenes without per-particle diameters; ignored otherwise.
   double diameter = 0.0;
   int threads = 0;  // 0 = resolve_threads(0)
   DetectionObserver* observer = nullptr;
-  HomeRange homes{};  // default: every particle is owned
+  HomeRange homes{};    // default: every particle is owned
+  HomeBlocks blocks{};  // default: every iteration of the loop is this process's
 };
 
 struct DetectRun {
