@@ -367,6 +367,15 @@ ContactList ContactDetector::neighbor_list(const Scene& scene, const DetectOptio
   return canonicalize(contacts_, working_to_input());
 }
 
+void ContactDetector::release_buffers() {
+  std::vector<detail::PartnerBuffer>().swap(thread_partners_);
+  std::vector<std::vector<std::uint32_t>>().swap(thread_homes_);
+  std::vector<std::uint32_t>().swap(found_count_);
+  std::vector<std::uint32_t>().swap(reverse_count_);
+  sorted_.x = sorted_.y = sorted_.z = sorted_.diameter = {};
+  narrow_x_ = narrow_y_ = narrow_z_ = narrow_d_ = {};
+}
+
 // The same traversal as run(), with an op that counts instead of testing.
 LoopWork ContactDetector::iteration_work(const Scene& scene, const DetectOptions& options) {
   DetectRun run;

@@ -70,7 +70,7 @@ PartitionMethod parse_partition_method(std::string_view text) {
 }
 
 Partition::Partition(const CellHistogram& histogram, int ranks, PartitionMethod method)
-    : ranks_(ranks) {
+    : dims_(histogram.dims), ranks_(ranks) {
   if (ranks < 1) throw InputError("partition: the rank count must be >= 1");
   const auto& dims = histogram.dims;
   if (std::max({dims[0], dims[1], dims[2]}) >= (1 << 21)) {
@@ -100,12 +100,30 @@ Partition::Partition(const CellHistogram& histogram, int ranks, PartitionMethod 
       cell.width = 1.0;
     }
     total_ = double(every_key.size());
-    return;
+  } else {
+    for (Cell& cell : cells_) {
+      cell.before = total_;
+      total_ += cell.width;
+      particle_work_max_ = std::max(particle_work_max_, cell.per_particle);
+    }
   }
   for (Cell& cell : cells_) {
-    cell.before = total_;
-    total_ += cell.width;
-    particle_work_max_ = std::max(particle_work_max_, cell.per_particle);
+    cell.first = owner_in(cell, 0);
+    cell.last = owner_in(cell, cell.count - 1);
+  }
+  // A cell's entry in O(1): the halo and the migration look cells up per particle.
+  index_.assign(histogram.count.size(), UINT32_MAX);
+  for (int cz = 0; cz < dims[2]; ++cz) {
+    for (int cy = 0; cy < dims[1]; ++cy) {
+      for (int cx = 0; cx < dims[0]; ++cx) {
+        const std::uint64_t linear = histogram.key(cx, cy, cz);
+        if (histogram.count[linear] == 0) continue;
+        const std::uint64_t key = morton_key(cx, cy, cz);
+        const auto it = std::lower_bound(cells_.begin(), cells_.end(), key,
+                                         [](const Cell& c, std::uint64_t k) { return c.key < k; });
+        index_[linear] = static_cast<std::uint32_t>(it - cells_.begin());
+      }
+    }
   }
 }
 
@@ -115,25 +133,29 @@ int Partition::rank_at(double position) const {
 }
 
 const Partition::Cell* Partition::find(int cx, int cy, int cz) const {
-  const std::uint64_t key = morton_key(cx, cy, cz);
-  const auto it = std::lower_bound(cells_.begin(), cells_.end(), key,
-                                   [](const Cell& c, std::uint64_t k) { return c.key < k; });
-  return it != cells_.end() && it->key == key ? &*it : nullptr;
+  const std::uint64_t linear =
+      (std::uint64_t(cz) * dims_[1] + std::uint64_t(cy)) * dims_[0] + std::uint64_t(cx);
+  if (linear >= index_.size() || index_[linear] == UINT32_MAX) return nullptr;
+  return &cells_[index_[linear]];
 }
 
 // The middle of the particle's stretch of the curve decides its rank.
+int Partition::owner_in(const Cell& cell, std::uint32_t k) const {
+  const double middle = cell.per_particle > 0.0 ? cell.before + (k + 0.5) * cell.per_particle
+                                                : cell.before + 0.5 * cell.width;
+  return rank_at(middle);
+}
+
 int Partition::owner(int cx, int cy, int cz, std::uint32_t k) const {
   const Cell* cell = find(cx, cy, cz);
   if (!cell) return -1;
-  const double middle = cell->per_particle > 0.0 ? cell->before + (k + 0.5) * cell->per_particle
-                                                 : cell->before + 0.5 * cell->width;
-  return rank_at(middle);
+  return cell->first == cell->last ? cell->first : owner_in(*cell, k);
 }
 
 std::pair<int, int> Partition::owners(int cx, int cy, int cz) const {
   const Cell* cell = find(cx, cy, cz);
   if (!cell) return {-1, -1};
-  return {owner(cx, cy, cz, 0), owner(cx, cy, cz, cell->count - 1)};
+  return {cell->first, cell->last};
 }
 
 double imbalance(const std::vector<std::uint64_t>& values) {

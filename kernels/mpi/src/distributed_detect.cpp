@@ -7,6 +7,7 @@
 #include <cstring>
 #include <limits>
 #include <optional>
+#include <span>
 
 #include "contactlab/kernels/atomic_file.hpp"
 #include "contactlab/kernels/error.hpp"
@@ -65,17 +66,36 @@ void check_diameter(const DetectOptions& options, bool diameters) {
   }
 }
 
-// The pairs (i << 32 | j, i < j) of a canonical list whose smaller id's row this rank reports:
-// `rows` rows, ids mapped by `global` (identity when empty).
-std::vector<std::uint64_t> pairs_from(const ContactList& list, std::size_t rows,
+// The pairs (i << 32 | j, i < j, global ids) in the detector's last contacts (working ids,
+// rows not canonicalised: the pairs are sorted later anyway) from the rows of input rows below
+// `rows`; `global` maps input rows to global ids (identity when empty). Each pair is in the
+// rows of both partners that list it, so keeping i < j takes it once.
+std::vector<std::uint64_t> pairs_from(const ContactDetector& detector, std::size_t rows,
                                       const std::vector<std::uint32_t>& global) {
+  const ContactList& list = detector.contacts();
+  const std::span<const std::uint32_t> to_input = detector.working_to_input();
+  auto global_of = [&](std::uint32_t working) -> std::uint64_t {
+    const std::uint32_t input = to_input.empty() ? working : to_input[working];
+    return global.empty() ? input : global[input];
+  };
+  // Two passes, counting first: the list is exactly as long as the pairs.
   std::vector<std::uint64_t> pairs;
-  for (std::size_t a = 0; a < rows; ++a) {
-    const std::uint64_t i = global.empty() ? a : global[a];
-    for (const std::uint32_t b : list.partners_of(a)) {
-      const std::uint64_t j = global.empty() ? b : global[b];
-      if (j > i) pairs.push_back(i << 32 | j);
+  for (int pass = 0; pass < 2; ++pass) {
+    std::uint64_t count = 0;
+    for (std::size_t a = 0; a < list.particle_count(); ++a) {
+      const auto row = list.partners_of(a);
+      if (row.empty()) continue;
+      const std::uint32_t input = to_input.empty() ? static_cast<std::uint32_t>(a) : to_input[a];
+      if (input >= rows) continue;
+      const std::uint64_t i = global.empty() ? input : global[input];
+      for (const std::uint32_t b : row) {
+        const std::uint64_t j = global_of(b);
+        if (j <= i) continue;
+        if (pass == 1) pairs.push_back(i << 32 | j);
+        ++count;
+      }
     }
+    if (pass == 0) pairs.reserve(count);
   }
   return pairs;
 }
@@ -115,9 +135,9 @@ std::vector<std::uint64_t> run_replicated(MPI_Comm comm, const SceneSource& sour
   run_checked(comm, [&] { record_run(detector.run(*scene, mine), report); });
   t = MPI_Wtime();
   run_checked(comm, [&] {
-    const ContactList list = detector.canonical_contacts();
     // Rows of other ranks' homes are empty (full stencil) or hold pairs found here (half).
-    pairs = pairs_from(list, list.particle_count(), {});
+    detector.release_buffers();
+    pairs = pairs_from(detector, scene->size(), {});
   });
   report.output_s = MPI_Wtime() - t;
   return pairs;
@@ -201,20 +221,31 @@ std::vector<std::uint64_t> run_decomposed(MPI_Comm comm, const SceneSource& sour
   std::vector<std::vector<char>> outgoing(ranks);
   run_checked(comm, [&] {
     partition = Partition(histogram, ranks, PartitionMethod::kWork);
-    auto cell_of = [&](const Particle& p) {
-      const auto c = grid->coords_of(p.x, p.y, p.z);
-      return histogram.key(c[0], c[1], c[2]);
-    };
-    std::stable_sort(read.begin(), read.end(),
-                     [&](const Particle& a, const Particle& b) { return cell_of(a) < cell_of(b); });
+    std::vector<std::uint32_t>().swap(histogram.count);  // the partition knows the occupied cells
+    // (cell key, index) of the read particles, sorted: by cell, then by input row.
+    std::vector<std::pair<std::uint64_t, std::uint32_t>> order(read.size());
+    for (std::uint32_t i = 0; i < read.size(); ++i) {
+      const auto c = grid->coords_of(read[i].x, read[i].y, read[i].z);
+      order[i] = {histogram.key(c[0], c[1], c[2]), i};
+    }
+    std::sort(order.begin(), order.end());
     std::uint64_t current = UINT64_MAX;
     std::uint32_t k = 0;  // the particle's index among its cell's particles, by input row
-    for (const Particle& p : read) {
-      const auto c = grid->coords_of(p.x, p.y, p.z);
-      const std::uint64_t key = histogram.key(c[0], c[1], c[2]);
-      k = key == current ? k + 1 : earlier[key];
-      current = key;
-      append(outgoing[partition.owner(c[0], c[1], c[2], k)], p);
+    std::pair<int, int> owners{-1, -1};
+    std::array<int, 3> c{};
+    for (const auto& [key, i] : order) {
+      const Particle& p = read[i];
+      if (key != current) {
+        current = key;
+        k = earlier[key];
+        c = grid->coords_of(p.x, p.y, p.z);
+        owners = partition.owners(c[0], c[1], c[2]);
+      } else {
+        ++k;
+      }
+      const int owner =
+          owners.first == owners.second ? owners.first : partition.owner(c[0], c[1], c[2], k);
+      append(outgoing[owner], p);
     }
     std::vector<Particle>().swap(read);
     std::vector<std::uint32_t>().swap(earlier);
@@ -249,7 +280,7 @@ std::vector<std::uint64_t> run_decomposed(MPI_Comm comm, const SceneSource& sour
         for (int z = std::max(c[2] - 1, 0); z <= std::min(c[2] + 1, dims[2] - 1); ++z) {
           for (int y = std::max(c[1] - 1, 0); y <= std::min(c[1] + 1, dims[1] - 1); ++y) {
             for (int x = std::max(c[0] - 1, 0); x <= std::min(c[0] + 1, dims[0] - 1); ++x) {
-              if (histogram.count[histogram.key(x, y, z)] == 0) continue;
+              if (!partition.occupied(x, y, z)) continue;
               ranges.push_back(partition.owners(x, y, z));
             }
           }
@@ -276,7 +307,7 @@ std::vector<std::uint64_t> run_decomposed(MPI_Comm comm, const SceneSource& sour
   std::vector<Particle> ghosts = unpack(halo_bytes);
   report.halo_bytes = halo_bytes.size();
   std::vector<std::vector<char>>().swap(outgoing);
-  CellHistogram().count.swap(histogram.count);  // the O(cells) histogram is no longer needed
+  partition = Partition();  // its O(cells) index is no longer needed
   report.exchange_s = MPI_Wtime() - t;
 
   // The local scene: owned particles, then ghosts, each ascending by input row. Its box is the
@@ -314,14 +345,18 @@ std::vector<std::uint64_t> run_decomposed(MPI_Comm comm, const SceneSource& sour
     for (int a = 0; a < 3; ++a) hi[a] = std::max(hi[a], lo[a] + width);
     local.box = Box{lo, hi};
     std::vector<Particle>().swap(ghosts);
+    const std::size_t owned_count = owned.size();
+    std::vector<Particle>().swap(owned);
 
     DetectOptions mine = options;
     mine.variant.stencil = Stencil::kFull;  // the half stencil misses owned-ghost pairs
-    mine.homes = {0, static_cast<std::uint32_t>(owned.size())};
+    mine.homes = {0, static_cast<std::uint32_t>(owned_count)};
     ContactDetector detector;
     record_run(detector.run(local, mine), report);
     const double output_start = MPI_Wtime();
-    pairs = pairs_from(detector.canonical_contacts(), owned.size(), global);
+    detector.release_buffers();
+    local = Scene{};
+    pairs = pairs_from(detector, owned_count, global);
     report.output_s = MPI_Wtime() - output_start;
   });
   return pairs;

@@ -4,6 +4,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <climits>
 #include <cstdio>
 #include <cstring>
 #include <string>
@@ -48,41 +49,65 @@ std::string temporary_name(MPI_Comm comm, const std::string& path) {
   return name;
 }
 
+int digits(std::uint64_t v) {
+  int d = 1;
+  while (v >= 10) {
+    v /= 10;
+    ++d;
+  }
+  return d;
+}
+
 }  // namespace
 
 void write_pairs_parallel(MPI_Comm comm, std::vector<std::uint64_t> pairs, std::uint64_t n,
                           const std::string& path) {
   const int ranks = size_of(comm);
   const int rank = rank_of(comm);
-  std::vector<std::vector<char>> outgoing(ranks);
+  // Sorted, the pairs are grouped by the rank writing them (rank q writes an id range), so they
+  // are sent from where they are, without a copy per destination.
+  std::vector<int> send_counts(ranks, 0), send_displs(ranks, 0);
   run_checked(comm, [&] {
-    for (const std::uint64_t pair : pairs) {
-      auto& out = outgoing[writer_of(pair >> 32, n, ranks)];
-      const char* bytes = reinterpret_cast<const char*>(&pair);
-      out.insert(out.end(), bytes, bytes + sizeof pair);
+    std::sort(pairs.begin(), pairs.end());
+    std::vector<std::uint64_t> counts(ranks, 0);
+    for (const std::uint64_t pair : pairs) ++counts[writer_of(pair >> 32, n, ranks)];
+    std::uint64_t at = 0;
+    for (int r = 0; r < ranks; ++r) {
+      if (counts[r] > INT_MAX || at > INT_MAX) {
+        throw InputError(path + ": too many contacts for one rank; use more processes");
+      }
+      send_counts[r] = static_cast<int>(counts[r]);
+      send_displs[r] = static_cast<int>(at);
+      at += counts[r];
     }
-    std::vector<std::uint64_t>().swap(pairs);
   });
-  std::vector<char> incoming = all_to_all_bytes(comm, outgoing);
-  std::vector<std::vector<char>>().swap(outgoing);
-
-  std::string text;
+  std::vector<int> recv_counts(ranks, 0), recv_displs(ranks, 0);
+  MPI_Alltoall(send_counts.data(), 1, MPI_INT, recv_counts.data(), 1, MPI_INT, comm);
+  std::vector<std::uint64_t> mine;
   run_checked(comm, [&] {
-    std::vector<std::uint64_t> mine(incoming.size() / sizeof(std::uint64_t));
-    std::memcpy(mine.data(), incoming.data(), incoming.size());
-    std::vector<char>().swap(incoming);
+    std::uint64_t at = 0;
+    for (int r = 0; r < ranks; ++r) {
+      if (at > INT_MAX) throw InputError(path + ": too many contacts for one rank");
+      recv_displs[r] = static_cast<int>(at);
+      at += static_cast<std::uint64_t>(recv_counts[r]);
+    }
+    mine.resize(at);
+  });
+  MPI_Alltoallv(pairs.data(), send_counts.data(), send_displs.data(), MPI_UINT64_T, mine.data(),
+                recv_counts.data(), recv_displs.data(), MPI_UINT64_T, comm);
+  std::vector<std::uint64_t>().swap(pairs);
+
+  // This rank's bytes, counted before formatting so that the text is made (and written) in
+  // chunks and never whole.
+  const std::string header = rank == 0 ? "i,j\n" : "";
+  std::uint64_t size = header.size();
+  run_checked(comm, [&] {
     std::sort(mine.begin(), mine.end());  // by i, then j: the serial file's order
-    if (rank == 0) text = "i,j\n";
-    text.reserve(text.size() + mine.size() * 16);
     for (const std::uint64_t pair : mine) {
-      text += std::to_string(pair >> 32);
-      text += ',';
-      text += std::to_string(pair & 0xffffffffu);
-      text += '\n';
+      size += std::uint64_t(digits(pair >> 32)) + digits(pair & 0xffffffffu) + 2;
     }
   });
-
-  std::uint64_t size = text.size(), offset = 0;
+  std::uint64_t offset = 0;
   MPI_Exscan(&size, &offset, 1, MPI_UINT64_T, MPI_SUM, comm);
   if (rank == 0) offset = 0;  // MPI_Exscan leaves rank 0's result undefined
 
@@ -95,17 +120,30 @@ void write_pairs_parallel(MPI_Comm comm, std::vector<std::uint64_t> pairs, std::
       throw InputError(path + ": cannot create the output: " + error_text(open_code));
     }
   });
-  // Collective writes in chunks below 2 GiB, the same number of calls on every rank.
-  constexpr std::uint64_t kChunk = std::uint64_t{1} << 30;
-  std::uint64_t chunks = (size + kChunk - 1) / kChunk, most = 0;
+  // Collective writes of up to kChunkPairs formatted pairs each, the same number of calls on
+  // every rank.
+  constexpr std::uint64_t kChunkPairs = std::uint64_t{1} << 20;
+  std::uint64_t chunks = (mine.size() + kChunkPairs - 1) / kChunkPairs, most = 0;
   MPI_Allreduce(&chunks, &most, 1, MPI_UINT64_T, MPI_MAX, comm);
+  most = std::max<std::uint64_t>(most, 1);  // the header
   int write_code = MPI_SUCCESS;
+  std::string text;
+  char number[24];
   for (std::uint64_t c = 0; c < most; ++c) {
-    const std::uint64_t begin = std::min(size, c * kChunk);
-    const std::uint64_t count = std::min(size, begin + kChunk) - begin;
+    text.clear();
+    if (c == 0) text = header;
+    const std::uint64_t begin = std::min<std::uint64_t>(mine.size(), c * kChunkPairs);
+    const std::uint64_t end = std::min<std::uint64_t>(mine.size(), begin + kChunkPairs);
+    for (std::uint64_t k = begin; k < end; ++k) {
+      const int a = std::snprintf(number, sizeof number, "%llu,%llu\n",
+                                  static_cast<unsigned long long>(mine[k] >> 32),
+                                  static_cast<unsigned long long>(mine[k] & 0xffffffffu));
+      text.append(number, static_cast<std::size_t>(a));
+    }
     const int code =
-        MPI_File_write_at_all(file, static_cast<MPI_Offset>(offset + begin), text.data() + begin,
-                              static_cast<int>(count), MPI_CHAR, MPI_STATUS_IGNORE);
+        MPI_File_write_at_all(file, static_cast<MPI_Offset>(offset), text.data(),
+                              static_cast<int>(text.size()), MPI_CHAR, MPI_STATUS_IGNORE);
+    offset += text.size();
     if (code != MPI_SUCCESS) write_code = code;
   }
   const int close_code = MPI_File_close(&file);

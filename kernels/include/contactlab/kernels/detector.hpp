@@ -157,6 +157,11 @@ class ContactDetector {
   // pairs, see HomeRange). Replaces contacts(). Throws InputError for skin < 0.
   ContactList neighbor_list(const Scene& scene, const DetectOptions& options, double skin);
 
+  // Frees the buffers kept between runs for speed (per-thread partner lists and bookkeeping,
+  // the reordered and single-precision copies), keeping contacts() and working_to_input():
+  // for a caller that next needs the memory (the MPI output). The next run reallocates them.
+  void release_buffers();
+
   // Contacts of the last run in working ids (see working_to_input()).
   const ContactList& contacts() const { return contacts_; }
   // Working id -> input row; empty when the working order is the input order.

@@ -65,6 +65,8 @@ class Partition {
   // The ranks owning a cell's particles: first and last of a contiguous range; {-1, -1} for an
   // empty cell.
   std::pair<int, int> owners(int cx, int cy, int cz) const;
+  // Whether the cell holds particles (of the histogram the partition was made from).
+  bool occupied(int cx, int cy, int cz) const { return find(cx, cy, cz) != nullptr; }
   // The largest work of one particle: the split's granularity.
   double particle_work_max() const { return particle_work_max_; }
 
@@ -75,11 +77,15 @@ class Partition {
     double per_particle;  // curve length of each particle (0 in the volume split)
     double width;         // curve length of the whole cell
     std::uint32_t count;
+    int first = 0, last = 0;  // the ranks owning its first and last particle
   };
   const Cell* find(int cx, int cy, int cz) const;
+  int owner_in(const Cell& cell, std::uint32_t k) const;
   int rank_at(double position) const;
 
   std::vector<Cell> cells_;  // occupied cells, by key
+  std::array<int, 3> dims_{1, 1, 1};
+  std::vector<std::uint32_t> index_;  // linear cell key -> its entry in cells_ (or UINT32_MAX)
   double total_ = 0.0;
   double particle_work_max_ = 0.0;
   int ranks_ = 1;
