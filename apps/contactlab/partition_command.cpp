@@ -93,7 +93,8 @@ int PartitionCommand::run() const {
 
   nlohmann::json methods = nlohmann::json::array();
   for (const PartitionMethod method : {PartitionMethod::kWork, PartitionMethod::kVolume}) {
-    const Partition partition(histogram, ranks_, method);
+    Partition partition(histogram, ranks_, method);
+    partition.index_cells();
     const PartitionReport report = evaluate_partition(histogram, partition);
     print_report(report, method, all_ranks_ || ranks_ <= kPrintedRanks);
     methods.push_back(to_json(report, method));

@@ -77,6 +77,9 @@ Partition::Partition(const CellHistogram& histogram, int ranks, PartitionMethod 
     throw InputError("partition: more than 2^21 cells along an axis");
   }
   std::vector<std::uint64_t> every_key;  // volume split: the curve position of a cell
+  std::size_t occupied = 0;
+  for (const std::uint32_t count : histogram.count) occupied += count > 0;
+  cells_.reserve(occupied);  // exactly: this list is the largest thing a rank keeps of it
   for (int cz = 0; cz < dims[2]; ++cz) {
     for (int cy = 0; cy < dims[1]; ++cy) {
       for (int cx = 0; cx < dims[0]; ++cx) {
@@ -85,7 +88,7 @@ Partition::Partition(const CellHistogram& histogram, int ranks, PartitionMethod 
         const std::uint32_t count = histogram.count[histogram.key(cx, cy, cz)];
         if (count == 0) continue;
         const double work = double(cell_work(histogram, cx, cy, cz));
-        cells_.push_back({key, 0.0, work / count, work, count});
+        cells_.push_back({key, histogram.key(cx, cy, cz), 0.0, work / count, work, count});
       }
     }
   }
@@ -111,20 +114,11 @@ Partition::Partition(const CellHistogram& histogram, int ranks, PartitionMethod 
     cell.first = owner_in(cell, 0);
     cell.last = owner_in(cell, cell.count - 1);
   }
-  // A cell's entry in O(1): the halo and the migration look cells up per particle.
-  index_.assign(histogram.count.size(), UINT32_MAX);
-  for (int cz = 0; cz < dims[2]; ++cz) {
-    for (int cy = 0; cy < dims[1]; ++cy) {
-      for (int cx = 0; cx < dims[0]; ++cx) {
-        const std::uint64_t linear = histogram.key(cx, cy, cz);
-        if (histogram.count[linear] == 0) continue;
-        const std::uint64_t key = morton_key(cx, cy, cz);
-        const auto it = std::lower_bound(cells_.begin(), cells_.end(), key,
-                                         [](const Cell& c, std::uint64_t k) { return c.key < k; });
-        index_[linear] = static_cast<std::uint32_t>(it - cells_.begin());
-      }
-    }
-  }
+}
+
+void Partition::index_cells() {
+  index_.assign(std::uint64_t(dims_[0]) * dims_[1] * dims_[2], UINT32_MAX);
+  for (std::uint32_t e = 0; e < cells_.size(); ++e) index_[cells_[e].linear] = e;
 }
 
 int Partition::rank_at(double position) const {
@@ -133,10 +127,15 @@ int Partition::rank_at(double position) const {
 }
 
 const Partition::Cell* Partition::find(int cx, int cy, int cz) const {
-  const std::uint64_t linear =
-      (std::uint64_t(cz) * dims_[1] + std::uint64_t(cy)) * dims_[0] + std::uint64_t(cx);
-  if (linear >= index_.size() || index_[linear] == UINT32_MAX) return nullptr;
-  return &cells_[index_[linear]];
+  if (!index_.empty()) {
+    const std::uint64_t linear =
+        (std::uint64_t(cz) * dims_[1] + std::uint64_t(cy)) * dims_[0] + std::uint64_t(cx);
+    return index_[linear] == UINT32_MAX ? nullptr : &cells_[index_[linear]];
+  }
+  const std::uint64_t key = morton_key(cx, cy, cz);
+  const auto it = std::lower_bound(cells_.begin(), cells_.end(), key,
+                                   [](const Cell& c, std::uint64_t k) { return c.key < k; });
+  return it != cells_.end() && it->key == key ? &*it : nullptr;
 }
 
 // The middle of the particle's stretch of the curve decides its rank.

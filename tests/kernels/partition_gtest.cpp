@@ -32,6 +32,8 @@ TEST(Partition, EveryParticleHasOneOwnerAndTotalsAreKept) {
   for (const int ranks : {1, 2, 3, 7, 64}) {
     for (const auto method : {PartitionMethod::kWork, PartitionMethod::kVolume}) {
       const Partition partition(histogram, ranks, method);
+      Partition indexed = partition;
+      indexed.index_cells();
       ASSERT_EQ(partition.ranks(), ranks);
       std::uint64_t particles = 0, work = 0;
       const auto& dims = histogram.dims;
@@ -40,6 +42,7 @@ TEST(Partition, EveryParticleHasOneOwnerAndTotalsAreKept) {
           for (int x = 0; x < dims[0]; ++x) {
             const std::uint32_t count = histogram.count[histogram.key(x, y, z)];
             const auto [first, last] = partition.owners(x, y, z);
+            ASSERT_EQ(indexed.owners(x, y, z), std::make_pair(first, last));
             if (count == 0) {
               EXPECT_EQ(first, -1);
               continue;

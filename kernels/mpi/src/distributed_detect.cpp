@@ -222,6 +222,7 @@ std::vector<std::uint64_t> run_decomposed(MPI_Comm comm, const SceneSource& sour
   run_checked(comm, [&] {
     partition = Partition(histogram, ranks, PartitionMethod::kWork);
     std::vector<std::uint32_t>().swap(histogram.count);  // the partition knows the occupied cells
+    partition.index_cells();
     // (cell key, index) of the read particles, sorted: by cell, then by input row.
     std::vector<std::pair<std::uint64_t, std::uint32_t>> order(read.size());
     for (std::uint32_t i = 0; i < read.size(); ++i) {

@@ -65,6 +65,10 @@ class Partition {
   // The ranks owning a cell's particles: first and last of a contiguous range; {-1, -1} for an
   // empty cell.
   std::pair<int, int> owners(int cx, int cy, int cz) const;
+  // Builds an O(cells) table making cell lookups O(1) instead of a binary search over the
+  // occupied cells: worth it for many lookups, once the histogram's memory is freed.
+  void index_cells();
+
   // Whether the cell holds particles (of the histogram the partition was made from).
   bool occupied(int cx, int cy, int cz) const { return find(cx, cy, cz) != nullptr; }
   // The largest work of one particle: the split's granularity.
@@ -72,10 +76,11 @@ class Partition {
 
  private:
   struct Cell {
-    std::uint64_t key;    // Morton key
-    double before;        // curve position of the cell's start (work or cells before it)
-    double per_particle;  // curve length of each particle (0 in the volume split)
-    double width;         // curve length of the whole cell
+    std::uint64_t key;     // Morton key
+    std::uint64_t linear;  // linear key
+    double before;         // curve position of the cell's start (work or cells before it)
+    double per_particle;   // curve length of each particle (0 in the volume split)
+    double width;          // curve length of the whole cell
     std::uint32_t count;
     int first = 0, last = 0;  // the ranks owning its first and last particle
   };
