@@ -4,6 +4,7 @@
 #include <fmt/core.h>
 
 #include <algorithm>
+#include <cstdio>
 #include <optional>
 
 #include "contactlab/kernels/atomic_file.hpp"
@@ -177,9 +178,15 @@ int run_detect_mpi(const MpiDetectRequest& request) {
       tn::write_result_file(request.json_out, result);
     });
     return 0;
-  } catch (const InputError&) {
-    throw;  // agreed: every rank leaves, the reporting one prints
+  } catch (const InputError& e) {
+    // Agreed: this rank reports. It prints before MPI_Finalize and the barrier holds the
+    // others until it has, because mpirun ends the job at the first non-zero exit.
+    fmt::print(stderr, "contactlab: error: {}\n", e.what());
+    std::fflush(stderr);
+    MPI_Barrier(comm);
+    throw ReportedElsewhere();
   } catch (const ReportedElsewhere&) {
+    MPI_Barrier(comm);
     throw;
   } catch (const std::exception& e) {
     mpi::abort_all(comm, e.what(), 2);
