@@ -116,6 +116,15 @@ Partition::Partition(const CellHistogram& histogram, int ranks, PartitionMethod 
   }
 }
 
+std::vector<std::uint64_t> Partition::shared_cells() const {
+  std::vector<std::uint64_t> keys;
+  for (const Cell& cell : cells_) {
+    if (cell.first != cell.last) keys.push_back(cell.linear);
+  }
+  std::sort(keys.begin(), keys.end());
+  return keys;
+}
+
 void Partition::index_cells() {
   index_.assign(std::uint64_t(dims_[0]) * dims_[1] * dims_[2], UINT32_MAX);
   for (std::uint32_t e = 0; e < cells_.size(); ++e) index_[cells_[e].linear] = e;

@@ -144,6 +144,7 @@ TEST(Partition, ADenseCellIsSharedBetweenRanks) {
   const Partition partition(histogram, 4, PartitionMethod::kWork);
   const auto [first, last] = partition.owners(1, 0, 0);
   EXPECT_LT(first, last);
+  EXPECT_EQ(partition.shared_cells(), std::vector<std::uint64_t>{histogram.key(1, 0, 0)});
   const PartitionReport report = evaluate_partition(histogram, partition);
   EXPECT_LE(report.work_imbalance,
             double(report.max_particle_work) * 4 / double(report.total_work) + 1e-9);

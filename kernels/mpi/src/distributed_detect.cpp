@@ -210,26 +210,36 @@ std::vector<std::uint64_t> run_decomposed(MPI_Comm comm, const SceneSource& sour
     }
   });
   result.partition_grid = grid->dims();
-  // Particles of a cell are ordered by input row, and shares are contiguous row ranges: the
-  // particles of a cell read by lower ranks come first (exclusive scan of the histograms).
-  std::vector<std::uint32_t> earlier(histogram.count.size(), 0);
   const int cells = static_cast<int>(histogram.count.size());
-  MPI_Exscan(histogram.count.data(), earlier.data(), cells, MPI_UINT32_T, MPI_SUM, comm);
-  if (rank == 0) std::fill(earlier.begin(), earlier.end(), 0u);
   MPI_Allreduce(MPI_IN_PLACE, histogram.count.data(), cells, MPI_UINT32_T, MPI_SUM, comm);
   Partition partition;
-  std::vector<std::vector<char>> outgoing(ranks);
+  // (cell key, index) of the read particles, sorted: by cell, then by input row.
+  std::vector<std::pair<std::uint64_t, std::uint32_t>> order(read.size());
+  std::vector<std::uint64_t> shared;  // keys of the cells whose particles several ranks own
+  std::vector<std::uint32_t> mine_in_shared;
   run_checked(comm, [&] {
     partition = Partition(histogram, ranks, PartitionMethod::kWork);
     std::vector<std::uint32_t>().swap(histogram.count);  // the partition knows the occupied cells
     partition.index_cells();
-    // (cell key, index) of the read particles, sorted: by cell, then by input row.
-    std::vector<std::pair<std::uint64_t, std::uint32_t>> order(read.size());
+    shared = partition.shared_cells();
+    mine_in_shared.assign(shared.size(), 0);
     for (std::uint32_t i = 0; i < read.size(); ++i) {
       const auto c = grid->coords_of(read[i].x, read[i].y, read[i].z);
       order[i] = {histogram.key(c[0], c[1], c[2]), i};
+      const auto it = std::lower_bound(shared.begin(), shared.end(), order[i].first);
+      if (it != shared.end() && *it == order[i].first) ++mine_in_shared[it - shared.begin()];
     }
     std::sort(order.begin(), order.end());
+  });
+  // Within a shared cell (at most P - 1 of them) particles are ordered by input row, and shares
+  // are contiguous row ranges: a rank's particles of the cell come after those that lower ranks
+  // read (an exclusive scan of the counts).
+  std::vector<std::uint32_t> earlier(shared.size(), 0);
+  MPI_Exscan(mine_in_shared.data(), earlier.data(), static_cast<int>(shared.size()), MPI_UINT32_T,
+             MPI_SUM, comm);
+  if (rank == 0) std::fill(earlier.begin(), earlier.end(), 0u);
+  std::vector<std::vector<char>> outgoing(ranks);
+  run_checked(comm, [&] {
     std::uint64_t current = UINT64_MAX;
     std::uint32_t k = 0;  // the particle's index among its cell's particles, by input row
     std::pair<int, int> owners{-1, -1};
@@ -238,9 +248,11 @@ std::vector<std::uint64_t> run_decomposed(MPI_Comm comm, const SceneSource& sour
       const Particle& p = read[i];
       if (key != current) {
         current = key;
-        k = earlier[key];
         c = grid->coords_of(p.x, p.y, p.z);
         owners = partition.owners(c[0], c[1], c[2]);
+        if (owners.first != owners.second) {
+          k = earlier[std::lower_bound(shared.begin(), shared.end(), key) - shared.begin()];
+        }
       } else {
         ++k;
       }
@@ -249,7 +261,7 @@ std::vector<std::uint64_t> run_decomposed(MPI_Comm comm, const SceneSource& sour
       append(outgoing[owner], p);
     }
     std::vector<Particle>().swap(read);
-    std::vector<std::uint32_t>().swap(earlier);
+    std::vector<std::pair<std::uint64_t, std::uint32_t>>().swap(order);
   });
   std::vector<std::uint64_t> received_counts;
   std::vector<Particle> owned = unpack(all_to_all_bytes(comm, outgoing, &received_counts));

@@ -65,6 +65,10 @@ class Partition {
   // The ranks owning a cell's particles: first and last of a contiguous range; {-1, -1} for an
   // empty cell.
   std::pair<int, int> owners(int cx, int cy, int cz) const;
+  // The linear keys (ascending) of the cells whose particles more than one rank owns: at most
+  // ranks - 1 of them.
+  std::vector<std::uint64_t> shared_cells() const;
+
   // Builds an O(cells) table making cell lookups O(1) instead of a binary search over the
   // occupied cells: worth it for many lookups, once the histogram's memory is freed.
   void index_cells();
