@@ -4,10 +4,10 @@
 //              iterations (the reordered particles) are dealt to ranks in blocks (block-cyclic,
 //              block 200 by default); each rank's OpenMP threads share its blocks with the
 //              variant's schedule. No communication but the output; memory does not scale.
-//  decomposed  each rank reads its share of the file, the cells are split by work along the
-//              Morton curve (partition.hpp, the same on every rank from the reduced histogram),
-//              particles move to their owners, and each rank receives a halo of width W (the
-//              particles of others' cells next to its own). Homes = owned particles only, ghosts
+//  decomposed  each rank reads its share of the file, the particles are split by work along
+//              the Morton curve (partition.hpp, the same on every rank from the reduced cell
+//              histogram), move to their owners, and each rank receives a halo of width W (the
+//              others' particles in and next to its particles' cells). Homes = owned only, ghosts
 //              sit in the grid (HomeRange), always with the full stencil. No rank holds every
 //              particle (except a generated or text scene, which every rank makes or reads
 //              whole before keeping its share).

@@ -29,13 +29,12 @@ class Session {
 int rank_of(MPI_Comm comm);
 int size_of(MPI_Comm comm);
 
-// Thrown on every process by run_checked when some process failed: the lowest failing rank
-// gets it with its own message (and prints it), the others get ReportedElsewhere (error.hpp).
-// Collective: every process of `comm` must call run_checked at the same phase boundary.
-//
-// Runs `phase` (local work, no communication) and agrees on its outcome: InputError,
-// bad_alloc and any std::exception are caught, so one rank's failure never leaves the others
-// waiting in the next collective.
+// Runs `phase` (local work, no communication) and agrees on its outcome with every process of
+// `comm` (collective: all call it at the same phase boundary). InputError, bad_alloc and any
+// std::exception are caught, so one rank's failure never leaves the others waiting in the
+// next collective. When some process failed, every process throws: the lowest failing rank
+// InputError with its own message (for it to print), the others ReportedElsewhere
+// (error.hpp).
 void run_checked(MPI_Comm comm, const std::function<void()>& phase);
 
 // The last resort for an error that escaped the agreement (it may have left other processes
