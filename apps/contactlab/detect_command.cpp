@@ -76,7 +76,7 @@ void DetectCommand::add_to(CLI::App& sub) {
                  "--mpi decomposed: halo width (default D, or the largest diameter)");
 }
 
-// What --mpi cannot combine with (it runs once, without counters or the tuner).
+// What --mpi cannot combine with (it runs once, without counters).
 void DetectCommand::check_mpi() const {
   if (threads_ < 0) throw InputError("--threads must be >= 0");
   for (const CLI::Option* option : repetition_options_) {
@@ -87,7 +87,6 @@ void DetectCommand::check_mpi() const {
   if (papi_ || !papi_events_.empty() || !cache_sim_.empty()) {
     throw InputError("--mpi does not support --papi, --papi-events or --cache-sim");
   }
-  if (variant_ == "auto") throw InputError("--mpi needs an explicit --variant (not auto)");
 }
 
 // Option values that are wrong whatever the scene: rejected before any work.
@@ -149,6 +148,7 @@ int DetectCommand::run() const {
     request.halo = halo_;
     request.scene = &scene_;
     request.variant = variant_;
+    request.cache_file = cache_file_;
     request.threads = threads_;
     request.contacts_out = contacts_out_;
     request.json_out = json_out_;

@@ -1,4 +1,5 @@
-// `detect --mpi replicated|decomposed`: the MPI path of the detect command (docs/mpi.md).
+// `detect --mpi replicated|decomposed` and `tune --mpi`: the MPI paths of the detect and tune
+// commands (docs/mpi.md).
 #include "detect_mpi.hpp"
 
 #include <fmt/core.h>
@@ -15,6 +16,8 @@
 #include "contactlab/mpi/runtime.hpp"
 #include "contactlab/tuner/context.hpp"
 #include "contactlab/tuner/result_schema.hpp"
+#include "contactlab/tuner/tune_report.hpp"
+#include "mpi_tuning.hpp"
 
 namespace contactlab::cli {
 namespace {
@@ -102,9 +105,10 @@ tn::RunRecord make_record(const mpi::MpiRun& run, const MpiDetectRequest& reques
   return record;
 }
 
-void print_run(const mpi::MpiRun& run) {
-  fmt::print("mpi {}  ranks {}  threads/rank {}  N {}  contacts {}\n", mpi::to_string(run.mode),
-             run.ranks, run.local.threads, run.particles, run.contact_pairs);
+void print_run(const mpi::MpiRun& run, const Variant& variant) {
+  fmt::print("mpi {}  ranks {}  threads/rank {}  N {}  contacts {}  variant {}\n",
+             mpi::to_string(run.mode), run.ranks, run.local.threads, run.particles,
+             run.contact_pairs, to_string(variant));
   fmt::print("{:>5} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>10} {:>9} {:>12} {:>9}\n", "rank",
              "read", "exchange", "T_s", "T_c", "output", "total", "owned", "halo", "tests",
              "RSS MiB");
@@ -125,62 +129,41 @@ void print_run(const mpi::MpiRun& run) {
              t_all, double(rss) / (1 << 20));
 }
 
-}  // namespace
+// Where the ranks get the particles: a binary file in decomposed mode is read in shares by the
+// ranks; anything else is made or read whole on every rank (the description then carries its
+// checksum). Local work: run inside the error agreement.
+struct OpenedSource {
+  mpi::SceneSource source;
+  std::optional<std::pair<Scene, tn::SceneRecord>> loaded;
+  tn::SceneRecord record;
+};
 
-int run_detect_mpi(const MpiDetectRequest& request) {
-  mpi::Session session(nullptr, nullptr);
-  const MPI_Comm comm = MPI_COMM_WORLD;
-  const int rank = mpi::rank_of(comm);
+void open_source(const SceneOptions& scene, mpi::Mode mode, OpenedSource& out) {
+  if (mode == mpi::Mode::kDecomposed && !scene.input_.empty() && is_binary_scene(scene.input_)) {
+    const BinarySceneHeader header = read_binary_header(scene.input_);
+    if (!header.diameters) scene.require_diameter();
+    out.source.path = scene.input_;
+    out.record.kind = "file";
+    out.record.path = scene.input_;
+    out.record.n = header.n;
+    if (!header.diameters) out.record.diameter = scene.diameter_;
+    const Box& b = header.box;
+    out.record.box = {b.lo[0], b.lo[1], b.lo[2], b.hi[0], b.hi[1], b.hi[2]};
+  } else {
+    out.loaded.emplace(scene.load());
+    out.source.scene = &out.loaded->first;
+    out.record = out.loaded->second;
+  }
+}
+
+// Runs `body` (the whole MPI command) and turns agreed errors into one message: the reporting
+// rank prints before MPI_Finalize and the barrier holds the others until it has, because
+// mpirun ends the job at the first non-zero exit.
+template <class Body>
+int with_agreed_errors(MPI_Comm comm, const Body& body) {
   try {
-    mpi::MpiOptions options;
-    Variant variant;
-    mpi::SceneSource source;
-    std::optional<std::pair<Scene, tn::SceneRecord>> loaded;
-    tn::SceneRecord scene_record;
-    mpi::run_checked(comm, [&] {
-      request.check_options();
-      options.mode = mpi::parse_mode(request.mode);
-      options.block = request.block;
-      options.halo = request.halo;
-      options.contacts_out = request.contacts_out;
-      variant = parse_variant(request.variant);
-      if (!request.json_out.empty() && rank == 0) check_writable(request.json_out);
-      const SceneOptions& scene = *request.scene;
-      // A binary file in decomposed mode is read in shares by the ranks; anything else is made
-      // or read whole on every rank (the description then carries its checksum).
-      if (options.mode == mpi::Mode::kDecomposed && !scene.input_.empty() &&
-          is_binary_scene(scene.input_)) {
-        const BinarySceneHeader header = read_binary_header(scene.input_);
-        if (!header.diameters) scene.require_diameter();
-        source.path = scene.input_;
-        scene_record.kind = "file";
-        scene_record.path = scene.input_;
-        scene_record.n = header.n;
-        if (!header.diameters) scene_record.diameter = scene.diameter_;
-        const Box& b = header.box;
-        scene_record.box = {b.lo[0], b.lo[1], b.lo[2], b.hi[0], b.hi[1], b.hi[2]};
-      } else {
-        loaded.emplace(scene.load());
-        source.scene = &loaded->first;
-        scene_record = loaded->second;
-      }
-    });
-    if (options.mode == mpi::Mode::kDecomposed) variant.stencil = Stencil::kFull;
-    DetectOptions detect_options{variant, request.scene->diameter_, request.threads, nullptr};
-    const mpi::MpiRun run = mpi::detect(comm, source, detect_options, options);
-    mpi::run_checked(comm, [&] {
-      if (rank != 0) return;
-      print_run(run);
-      if (request.json_out.empty()) return;
-      tn::ResultFile result;
-      result.context = tn::collect_context(request.command_line, run.local.threads);
-      result.runs.push_back(make_record(run, request, to_string(variant), scene_record));
-      tn::write_result_file(request.json_out, result);
-    });
-    return 0;
+    return body();
   } catch (const InputError& e) {
-    // Agreed: this rank reports. It prints before MPI_Finalize and the barrier holds the
-    // others until it has, because mpirun ends the job at the first non-zero exit.
     fmt::print(stderr, "contactlab: error: {}\n", e.what());
     std::fflush(stderr);
     MPI_Barrier(comm);
@@ -191,6 +174,96 @@ int run_detect_mpi(const MpiDetectRequest& request) {
   } catch (const std::exception& e) {
     mpi::abort_all(comm, e.what(), 2);
   }
+}
+
+}  // namespace
+
+int run_detect_mpi(const MpiDetectRequest& request) {
+  mpi::Session session(nullptr, nullptr);
+  const MPI_Comm comm = MPI_COMM_WORLD;
+  const int rank = mpi::rank_of(comm);
+  return with_agreed_errors(comm, [&] {
+    mpi::MpiOptions options;
+    Variant variant;
+    const bool automatic = request.variant == "auto";
+    OpenedSource opened;
+    mpi::run_checked(comm, [&] {
+      request.check_options();
+      options.mode = mpi::parse_mode(request.mode);
+      options.block = request.block;
+      options.halo = request.halo;
+      options.contacts_out = request.contacts_out;
+      if (!automatic) variant = parse_variant(request.variant);
+      if (!request.json_out.empty() && rank == 0) check_writable(request.json_out);
+      open_source(*request.scene, options.mode, opened);
+    });
+    DetectOptions detect_options{variant, request.scene->diameter_, request.threads, nullptr};
+    mpi::PreparedRun prepared = mpi::prepare(comm, opened.source, detect_options, options);
+    if (automatic) {
+      detect_options.variant = mpi_auto_variant(
+          comm, prepared, opened.record, request.scene->diameter_, resolve_threads(request.threads),
+          request.cache_file, request.command_line, options);
+    }
+    if (options.mode == mpi::Mode::kDecomposed) detect_options.variant.stencil = Stencil::kFull;
+    variant = detect_options.variant;
+    const mpi::MpiRun run = mpi::finish(comm, prepared, detect_options, options);
+    mpi::run_checked(comm, [&] {
+      if (rank != 0) return;
+      print_run(run, variant);
+      if (request.json_out.empty()) return;
+      tn::ResultFile result;
+      result.context = tn::collect_context(request.command_line, run.local.threads);
+      result.runs.push_back(make_record(run, request, to_string(variant), opened.record));
+      tn::write_result_file(request.json_out, result);
+    });
+    return 0;
+  });
+}
+
+int run_tune_mpi(const MpiTuneRequest& request) {
+  mpi::Session session(nullptr, nullptr);
+  const MPI_Comm comm = MPI_COMM_WORLD;
+  const int rank = mpi::rank_of(comm);
+  return with_agreed_errors(comm, [&] {
+    mpi::MpiOptions options;
+    tn::TuneOptions tune_options;
+    OpenedSource opened;
+    mpi::run_checked(comm, [&] {
+      request.check_options();
+      tune_options = request.options();
+      options.mode = mpi::parse_mode(request.mode);
+      options.block = request.block;
+      options.halo = request.halo;
+      if (!request.json_out.empty() && rank == 0) check_writable(request.json_out);
+      open_source(*request.scene, options.mode, opened);
+    });
+    const double diameter = request.scene->diameter_;
+    const int threads = tune_options.threads;
+    mpi::PreparedRun prepared = mpi::prepare(
+        comm, opened.source, DetectOptions{Variant{}, diameter, threads, nullptr}, options);
+    tn::TuningCache cache(request.cache_file.empty() ? tn::TuningCache::default_path()
+                                                     : request.cache_file);
+    const tn::Calibration calibration =
+        mpi_calibration(comm, cache, tune_options, threads, request.recalibrate);
+    const tn::TuneReport report =
+        tune_mpi_part(comm, prepared, opened.record, diameter, tune_options, calibration,
+                      request.command_line, options);
+    const std::string setting = mpi_cache_setting(prepared, opened.record, options);
+    mpi::run_checked(comm, [&] {
+      if (rank != 0) return;
+      fmt::print("{}: every time is the slowest rank's\n", setting);
+      request.print(report.document);
+      if (!tune_options.predict_only) {
+        cache.store_choice(opened.record, diameter, threads, report.chosen, 0.0, setting);
+      }
+      if (!request.json_out.empty()) {
+        write_file_atomically(request.json_out, [&](std::ostream& out) {
+          out << tn::to_json_value(report.document).dump(2) << '\n';
+        });
+      }
+    });
+    return 0;
+  });
 }
 
 }  // namespace contactlab::cli

@@ -394,7 +394,21 @@ LoopWork ContactDetector::iteration_work(const Scene& scene, const DetectOptions
         {grid, registry_, variant.loop, variant.stencil, options.homes, options.blocks}, layout,
         op);
   });
-  return work;
+  if (options.blocks.all()) return work;
+  // Loop order: the loop runs over this process's blocks only (k -> blocks.at(k)), so the
+  // schedule divides exactly those; the counts were kept by iteration id.
+  LoopWork mine;
+  const std::uint64_t size = options.blocks.size(iterations);
+  mine.tests.resize(size);
+  mine.homes.resize(size);
+  mine.builds.resize(size);
+  for (std::uint64_t k = 0; k < size; ++k) {
+    const std::uint64_t i = options.blocks.at(k);
+    mine.tests[k] = work.tests[i];
+    mine.homes[k] = work.homes[i];
+    mine.builds[k] = work.builds[i];
+  }
+  return mine;
 }
 
 }  // namespace contactlab

@@ -200,8 +200,20 @@ TEST(HomeBlocks, ProcessesTogetherFindEveryContact) {
       options.diameter = spec.diameter;
       options.threads = 2;
       options.blocks = {64, 3, index};
-      detector.run(scene, options);
+      const DetectRun run = detector.run(scene, options);
       const ContactList list = detector.canonical_contacts();
+      // The work the schedule model sees is this process's iterations, in its loop's order.
+      const LoopWork work = detector.iteration_work(scene, options);
+      DetectOptions whole = options;
+      whole.blocks = {};
+      const LoopWork every = detector.iteration_work(scene, whole);
+      ASSERT_EQ(work.tests.size(), options.blocks.size(every.tests.size())) << to_string(variant);
+      std::uint64_t tests = 0;
+      for (std::uint64_t k = 0; k < work.tests.size(); ++k) {
+        ASSERT_EQ(work.tests[k], every.tests[options.blocks.at(k)]) << to_string(variant);
+        tests += work.tests[k];
+      }
+      EXPECT_EQ(tests, run.candidate_tests) << to_string(variant);
       for (std::size_t i = 0; i < list.particle_count(); ++i) {
         for (const std::uint32_t j : list.partners_of(i)) {
           if (j <= i) continue;

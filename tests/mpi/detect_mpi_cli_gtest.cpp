@@ -17,8 +17,12 @@
 namespace contactlab::test {
 namespace {
 
+// The MPI tests' environment is set on the command line: CTest's ENVIRONMENT property takes
+// one list, which gtest_discover_tests' PROPERTIES splits (as root Open MPI refuses to start
+// without the first two).
 std::string mpiexec(int ranks) {
-  return std::string(CONTACTLAB_MPIEXEC) + " -np " + std::to_string(ranks) + " ";
+  return std::string(CONTACTLAB_MPI_ENV) + " " + CONTACTLAB_MPIEXEC + " -np " +
+         std::to_string(ranks) + " ";
 }
 
 std::string slurp(const std::string& path) {
@@ -126,8 +130,8 @@ TEST(DetectMpi, ABadOptionOnEveryRankGivesOneMessage) {
 
 // Without mpiexec (a singleton MPI process) --mpi works on one rank.
 TEST(DetectMpi, RunsWithoutMpiexecAsOneRank) {
-  const auto run =
-      run_command(contactlab_exe() + " detect --scene uniform --n 2000 -D 0.03 --mpi decomposed");
+  const auto run = run_command(std::string(CONTACTLAB_MPI_ENV) + " " + contactlab_exe() +
+                               " detect --scene uniform --n 2000 -D 0.03 --mpi decomposed");
   EXPECT_EQ(run.exit_code, 0) << run.output;
   EXPECT_NE(run.output.find("ranks 1"), std::string::npos) << run.output;
 }

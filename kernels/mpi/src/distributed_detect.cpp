@@ -109,46 +109,33 @@ void record_run(const DetectRun& run, RankReport& report) {
 }
 
 // Every rank loads the whole scene and visits its blocks of the loop.
-std::vector<std::uint64_t> run_replicated(MPI_Comm comm, const SceneSource& source,
-                                          const DetectOptions& options, const MpiOptions& mpi,
-                                          MpiRun& result) {
+void prepare_replicated(MPI_Comm comm, const SceneSource& source, const DetectOptions& options,
+                        const MpiOptions& mpi, MpiRun& result, RankPart& part) {
   RankReport& report = result.local;
-  Scene loaded;
-  const Scene* scene = source.scene;
-  double t = MPI_Wtime();
+  part.mode = Mode::kReplicated;
+  part.external = source.scene;
+  const double t = MPI_Wtime();
   run_checked(comm, [&] {
     if (!source.path.empty()) {
-      loaded = read_scene(source.path, source.text_box);
-      scene = &loaded;
+      part.local = read_scene(source.path, source.text_box);
+      part.external = nullptr;
     }
-    check_diameter(options, scene->has_diameters());
+    check_diameter(options, part.scene().has_diameters());
   });
   report.read_s = MPI_Wtime() - t;
-  result.particles = scene->size();
-  report.owned_particles = scene->size();
-
-  DetectOptions mine = options;
-  mine.blocks = {mpi.block, static_cast<std::uint32_t>(result.ranks),
+  result.particles = part.scene().size();
+  report.owned_particles = part.scene().size();
+  part.blocks = {mpi.block, static_cast<std::uint32_t>(result.ranks),
                  static_cast<std::uint32_t>(result.rank)};
-  ContactDetector detector;
-  std::vector<std::uint64_t> pairs;
-  run_checked(comm, [&] { record_run(detector.run(*scene, mine), report); });
-  t = MPI_Wtime();
-  run_checked(comm, [&] {
-    // Rows of other ranks' homes are empty (full stencil) or hold pairs found here (half).
-    detector.release_buffers();
-    pairs = pairs_from(detector, scene->size(), {});
-  });
-  report.output_s = MPI_Wtime() - t;
-  return pairs;
+  part.present = true;
 }
 
 // Each rank reads its share, the particles go to the owners of their cells, and each rank
 // receives its halo; then detection with owned homes and ghosts in the grid.
-std::vector<std::uint64_t> run_decomposed(MPI_Comm comm, const SceneSource& source,
-                                          const DetectOptions& options, const MpiOptions& mpi,
-                                          MpiRun& result) {
+void prepare_decomposed(MPI_Comm comm, const SceneSource& source, const DetectOptions& options,
+                        const MpiOptions& mpi, MpiRun& result, RankPart& part) {
   RankReport& report = result.local;
+  part.mode = Mode::kDecomposed;
   const int rank = result.rank, ranks = result.ranks;
   std::uint64_t n = 0;
   Box box;
@@ -162,11 +149,11 @@ std::vector<std::uint64_t> run_decomposed(MPI_Comm comm, const SceneSource& sour
     if (!source.path.empty() && is_binary_scene(source.path)) {
       const BinarySceneHeader header = read_binary_header(source.path);
       const auto [first, last] = share(header.n);
-      const Scene part = read_binary_rows(source.path, header, first, last);
+      const Scene rows = read_binary_rows(source.path, header, first, last);
       n = header.n;
       box = header.box;
       diameters = header.diameters;
-      read = particles_of(part, 0, part.size(), first);
+      read = particles_of(rows, 0, rows.size(), first);
     } else {
       // Text files and generated scenes cannot be read in parts: the whole, then the share.
       Scene loaded;
@@ -325,15 +312,14 @@ std::vector<std::uint64_t> run_decomposed(MPI_Comm comm, const SceneSource& sour
 
   // The local scene: owned particles, then ghosts, each ascending by input row. Its box is the
   // particles' bounding box (so the detection grid is O(local volume), not the whole box).
-  std::vector<std::uint64_t> pairs;
   run_checked(comm, [&] {
     std::sort(ghosts.begin(), ghosts.end(),
               [](const Particle& a, const Particle& b) { return a.id < b.id; });
     report.owned_particles = owned.size();
     report.halo_particles = ghosts.size();
     if (owned.empty()) return;  // an empty subdomain: nothing to detect, ghosts unused
-    Scene local;
-    std::vector<std::uint32_t> global;
+    Scene& local = part.local;
+    std::vector<std::uint32_t>& global = part.global;
     local.reserve(owned.size() + ghosts.size());
     global.reserve(owned.size() + ghosts.size());
     std::array<double, 3> lo{std::numeric_limits<double>::max(), std::numeric_limits<double>::max(),
@@ -357,30 +343,30 @@ std::vector<std::uint64_t> run_decomposed(MPI_Comm comm, const SceneSource& sour
     }
     for (int a = 0; a < 3; ++a) hi[a] = std::max(hi[a], lo[a] + width);
     local.box = Box{lo, hi};
+    part.owned = owned.size();
+    part.homes = {0, static_cast<std::uint32_t>(owned.size())};
+    part.present = true;
     std::vector<Particle>().swap(ghosts);
-    const std::size_t owned_count = owned.size();
     std::vector<Particle>().swap(owned);
-
-    DetectOptions mine = options;
-    mine.variant.stencil = Stencil::kFull;  // the half stencil misses owned-ghost pairs
-    mine.homes = {0, static_cast<std::uint32_t>(owned_count)};
-    ContactDetector detector;
-    record_run(detector.run(local, mine), report);
-    const double output_start = MPI_Wtime();
-    detector.release_buffers();
-    local = Scene{};
-    pairs = pairs_from(detector, owned_count, global);
-    report.output_s = MPI_Wtime() - output_start;
   });
-  return pairs;
 }
 
 }  // namespace
 
-MpiRun detect(MPI_Comm comm, const SceneSource& source, const DetectOptions& options,
-              const MpiOptions& mpi_options) {
-  const double start = MPI_Wtime();
-  MpiRun result;
+DetectOptions RankPart::options_for(const DetectOptions& options) const {
+  DetectOptions mine = options;
+  mine.homes = homes;
+  mine.blocks = blocks;
+  // The half stencil misses owned-ghost pairs whose home would be the ghost.
+  if (mode == Mode::kDecomposed) mine.variant.stencil = Stencil::kFull;
+  return mine;
+}
+
+PreparedRun prepare(MPI_Comm comm, const SceneSource& source, const DetectOptions& options,
+                    const MpiOptions& mpi_options) {
+  PreparedRun prepared;
+  prepared.start = MPI_Wtime();
+  MpiRun& result = prepared.result;
   result.mode = mpi_options.mode;
   result.rank = rank_of(comm);
   result.ranks = size_of(comm);
@@ -396,11 +382,34 @@ MpiRun detect(MPI_Comm comm, const SceneSource& source, const DetectOptions& opt
       check_writable(mpi_options.contacts_out);
     }
   });
+  if (mpi_options.mode == Mode::kReplicated) {
+    prepare_replicated(comm, source, options, mpi_options, result, prepared.part);
+  } else {
+    prepare_decomposed(comm, source, options, mpi_options, result, prepared.part);
+  }
+  return prepared;
+}
 
-  std::vector<std::uint64_t> pairs =
-      mpi_options.mode == Mode::kReplicated
-          ? run_replicated(comm, source, options, mpi_options, result)
-          : run_decomposed(comm, source, options, mpi_options, result);
+MpiRun finish(MPI_Comm comm, PreparedRun& prepared, const DetectOptions& options,
+              const MpiOptions& mpi_options) {
+  MpiRun result = std::move(prepared.result);
+  RankPart& part = prepared.part;
+  RankReport& report = result.local;
+  report.threads = resolve_threads(options.threads);
+  std::vector<std::uint64_t> pairs;
+  run_checked(comm, [&] {
+    if (!part.present) return;  // an empty subdomain
+    ContactDetector detector;
+    record_run(detector.run(part.scene(), part.options_for(options)), report);
+    const double output_start = MPI_Wtime();
+    // Replicated: rows of other ranks' homes are empty (full stencil) or hold pairs found here
+    // (half). Decomposed: rows below `owned` are the owned particles.
+    detector.release_buffers();
+    const std::size_t rows = part.mode == Mode::kDecomposed ? part.owned : part.scene().size();
+    if (part.mode == Mode::kDecomposed) part.local = Scene{};
+    pairs = pairs_from(detector, rows, part.global);
+    report.output_s = MPI_Wtime() - output_start;
+  });
   report.contact_pairs = pairs.size();
   MPI_Allreduce(&report.contact_pairs, &result.contact_pairs, 1, MPI_UINT64_T, MPI_SUM, comm);
   if (!mpi_options.contacts_out.empty()) {
@@ -409,11 +418,17 @@ MpiRun detect(MPI_Comm comm, const SceneSource& source, const DetectOptions& opt
     report.output_s += MPI_Wtime() - t;
   }
   report.peak_rss_bytes = peak_rss_bytes();
-  report.total_s = MPI_Wtime() - start;
+  report.total_s = MPI_Wtime() - prepared.start;
   if (result.rank == 0) result.all.resize(result.ranks);
   MPI_Gather(&report, sizeof(RankReport), MPI_BYTE, result.all.data(), sizeof(RankReport), MPI_BYTE,
              0, comm);
   return result;
+}
+
+MpiRun detect(MPI_Comm comm, const SceneSource& source, const DetectOptions& options,
+              const MpiOptions& mpi_options) {
+  PreparedRun prepared = prepare(comm, source, options, mpi_options);
+  return finish(comm, prepared, options, mpi_options);
 }
 
 }  // namespace contactlab::mpi

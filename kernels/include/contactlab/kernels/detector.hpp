@@ -144,7 +144,9 @@ class ContactDetector {
   // What each iteration of the variant's parallel loop (a particle, or a cell with all its
   // particles) will do, in loop order: the exact work a schedule distributes among threads,
   // known from the cell occupancy before any pair is tested. The tuner's zero-run model reads
-  // it. Costs one registration and a pass over the stencils.
+  // it. Costs one registration and a pass over the stencils. With HomeBlocks, the process's
+  // iterations only (the k-th entry is iteration blocks.at(k)), as its loop runs them; with a
+  // HomeRange, every iteration, those without an owned home counting none.
   LoopWork iteration_work(const Scene& scene, const DetectOptions& options);
 
   // Half neighbour list for DEM: every pair within r_i + r_j + skin (D + skin without

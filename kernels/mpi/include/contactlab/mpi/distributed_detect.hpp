@@ -83,6 +83,40 @@ struct MpiRun {
   std::vector<RankReport> all;  // every rank's report, on rank 0 only
 };
 
+// One rank's part of the detection once the scene is read and (decomposed) the particles and
+// halos exchanged: the scene this rank detects on and its homes. Replicated: the whole scene and
+// its blocks of the loop (HomeBlocks); decomposed: its owned particles then its ghosts, homes
+// the owned rows (HomeRange). What the tuner runs as one rank's kernel (`--variant auto`,
+// `tune --mpi`).
+struct RankPart {
+  Mode mode = Mode::kDecomposed;
+  bool present = false;               // false: an empty subdomain, nothing to detect
+  const Scene* external = nullptr;    // the scene when the caller holds it (replicated)
+  Scene local;                        // else the scene, held here
+  std::vector<std::uint32_t> global;  // decomposed: the input row of each local particle
+  std::size_t owned = 0;              // decomposed: local rows [0, owned) are the homes
+  HomeRange homes{};
+  HomeBlocks blocks{};
+  const Scene& scene() const { return external ? *external : local; }
+  // `options` restricted to this rank's homes (decomposed: always the full stencil).
+  DetectOptions options_for(const DetectOptions& options) const;
+};
+
+struct PreparedRun {
+  MpiRun result;  // what is known before the detection (read and exchange)
+  RankPart part;
+  double start = 0.0;
+};
+
+// detect() in two steps, both collective over `comm`: prepare() reads and exchanges (only
+// options.diameter and options.threads are used), finish() detects with `options`, emits the
+// pairs, writes contacts_out and gathers the reports. Between them the caller may run the
+// rank's part as it likes (the tuner). Errors as detect().
+PreparedRun prepare(MPI_Comm comm, const SceneSource& source, const DetectOptions& options,
+                    const MpiOptions& mpi_options);
+MpiRun finish(MPI_Comm comm, PreparedRun& prepared, const DetectOptions& options,
+              const MpiOptions& mpi_options);
+
 // Collective over `comm`. Throws InputError (on the rank reporting it) or ReportedElsewhere
 // (on the others) when any rank fails; nothing is left at contacts_out then.
 MpiRun detect(MPI_Comm comm, const SceneSource& source, const DetectOptions& options,
