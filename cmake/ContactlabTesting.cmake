@@ -36,3 +36,41 @@ function(contactlab_program_test name)
                              CONTACTLAB_TUNE_CACHE_DIR="${PROJECT_BINARY_DIR}/tests/tune-cache")
   add_dependencies(${name} contactlab contactlab_cachesim)
 endfunction()
+
+# MPI tests: contactlab_add_mpi_test(NAME LIBS lib... RANKS k... [SOURCE file] [TIMEOUT seconds])
+# builds NAME.cpp (or SOURCE) as a GoogleTest program with its own main (it initialises MPI)
+# and registers one CTest test NAME_npK per rank count, run as `mpiexec -np K` (oversubscribed
+# with Open MPI, so 4 ranks run on 2 cores), labelled mpi. CONTACTLAB_MPI_TEST_ENVIRONMENT is
+# the environment of every MPI test (Open MPI refuses root without its two variables).
+set(CONTACTLAB_MPI_TEST_ENVIRONMENT OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
+    OMP_WAIT_POLICY=passive OMPI_MCA_rmaps_base_oversubscribe=1)
+set(CONTACTLAB_MPIEXEC_FLAGS "")
+if(MPIEXEC_EXECUTABLE)
+  execute_process(COMMAND ${MPIEXEC_EXECUTABLE} --version OUTPUT_VARIABLE _cl_mpiexec_version
+                  ERROR_QUIET)
+  if(_cl_mpiexec_version MATCHES "Open MPI|OpenRTE")
+    set(CONTACTLAB_MPIEXEC_FLAGS --oversubscribe)
+  endif()
+endif()
+
+function(contactlab_add_mpi_test name)
+  cmake_parse_arguments(ARG "" "SOURCE;TIMEOUT" "LIBS;RANKS" ${ARGN})
+  if(NOT ARG_SOURCE)
+    set(ARG_SOURCE ${name}.cpp)
+  endif()
+  if(NOT ARG_TIMEOUT)
+    set(ARG_TIMEOUT 120)
+  endif()
+  add_executable(${name} ${ARG_SOURCE})
+  target_link_libraries(${name} PRIVATE ${ARG_LIBS} contactlab::flags GTest::gtest MPI::MPI_CXX)
+  target_include_directories(${name} PRIVATE ${CMAKE_CURRENT_SOURCE_DIR}
+                                             ${PROJECT_SOURCE_DIR}/tests/common)
+  math(EXPR timeout "${ARG_TIMEOUT} * ${CONTACTLAB_TEST_TIME_SCALE}")
+  foreach(ranks ${ARG_RANKS})
+    add_test(NAME ${name}_np${ranks}
+             COMMAND ${MPIEXEC_EXECUTABLE} ${MPIEXEC_NUMPROC_FLAG} ${ranks} ${CONTACTLAB_MPIEXEC_FLAGS}
+                     ${MPIEXEC_PREFLAGS} $<TARGET_FILE:${name}> ${MPIEXEC_POSTFLAGS})
+    set_tests_properties(${name}_np${ranks} PROPERTIES LABELS mpi TIMEOUT ${timeout}
+                         ENVIRONMENT "${CONTACTLAB_MPI_TEST_ENVIRONMENT}")
+  endforeach()
+endfunction()

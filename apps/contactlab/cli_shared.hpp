@@ -29,6 +29,7 @@ Subcommand add_detect_command(CLI::App& app, const std::string& command_line);
 Subcommand add_variants_command(CLI::App& app);
 Subcommand add_sweep_command(CLI::App& app, const std::string& command_line);
 Subcommand add_tune_command(CLI::App& app, const std::string& command_line);
+Subcommand add_partition_command(CLI::App& app);
 Subcommand add_demo_command(CLI::App& app);
 Subcommand add_dem_command(CLI::App& app);
 

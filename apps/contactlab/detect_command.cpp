@@ -14,6 +14,7 @@
 #include "contactlab/tuner/context.hpp"
 #include "contactlab/tuner/measure.hpp"
 #include "contactlab/tuner/papi_counters.hpp"
+#include "detect_mpi.hpp"
 
 namespace contactlab::cli {
 namespace {
@@ -32,9 +33,14 @@ struct DetectCommand {
   std::string contacts_out_;
   std::string json_out_;
   std::string command_line_;
+  std::string mpi_;  // empty: no MPI (the default, whether or not under mpirun)
+  std::uint32_t block_ = 200;
+  double halo_ = 0.0;
+  std::vector<CLI::Option*> repetition_options_;  // --mpi runs once: these must not be given
 
   void add_to(CLI::App& sub);
   void check() const;
+  [[maybe_unused]] void check_mpi() const;  // unused in a build without MPI
   int run() const;
 };
 
@@ -44,10 +50,13 @@ void DetectCommand::add_to(CLI::App& sub) {
                  "loop/order[/stencil]/schedule[/float], or auto (the tuner's cached choice)");
   sub.add_option("--cache", cache_file_, "tuning cache file for --variant auto");
   sub.add_option("--threads", threads_, "OpenMP threads (0 = all)");
-  sub.add_option("--repeat", repetition_.repeat, "timed repetitions");
-  sub.add_option("--warmup", repetition_.warmup, "untimed runs first");
-  sub.add_flag("--adaptive", repetition_.adaptive,
-               "repeat until the median's 95% interval is within --target-ci (--repeat = minimum)");
+  repetition_options_.push_back(
+      sub.add_option("--repeat", repetition_.repeat, "timed repetitions"));
+  repetition_options_.push_back(
+      sub.add_option("--warmup", repetition_.warmup, "untimed runs first"));
+  repetition_options_.push_back(sub.add_flag(
+      "--adaptive", repetition_.adaptive,
+      "repeat until the median's 95% interval is within --target-ci (--repeat = minimum)"));
   sub.add_option("--target-ci", repetition_.target_relative_half_width,
                  "adaptive: target relative half-width of the median's interval (0.02 = 2%)");
   sub.add_option("--time-budget", repetition_.time_budget_s, "adaptive: seconds before giving up");
@@ -60,6 +69,24 @@ void DetectCommand::add_to(CLI::App& sub) {
       "simulate caches under valgrind: host, fx10, or custom:L1SIZE,WAYS,LINE:L2SIZE,WAYS,LINE");
   sub.add_option("--contacts-out", contacts_out_, "CSV of contacts i,j (i < j)");
   sub.add_option("--json", json_out_, "result file (docs/result-schema.md)");
+  sub.add_option("--mpi", mpi_,
+                 "run over the MPI processes (under mpirun): replicated (the paper) or decomposed");
+  sub.add_option("--block", block_, "--mpi replicated: block size of the block-cyclic deal");
+  sub.add_option("--halo", halo_,
+                 "--mpi decomposed: halo width (default D, or the largest diameter)");
+}
+
+// What --mpi cannot combine with (it runs once, without counters).
+void DetectCommand::check_mpi() const {
+  if (threads_ < 0) throw InputError("--threads must be >= 0");
+  for (const CLI::Option* option : repetition_options_) {
+    if (option->count() > 0) {
+      throw InputError("--mpi runs once: " + option->get_name() + " is not supported with it");
+    }
+  }
+  if (papi_ || !papi_events_.empty() || !cache_sim_.empty()) {
+    throw InputError("--mpi does not support --papi, --papi-events or --cache-sim");
+  }
 }
 
 // Option values that are wrong whatever the scene: rejected before any work.
@@ -113,6 +140,25 @@ void print_run(const tn::RunRecord& run, std::size_t particles) {
 }
 
 int DetectCommand::run() const {
+  if (!mpi_.empty()) {
+#ifdef CONTACTLAB_HAVE_MPI
+    MpiDetectRequest request;
+    request.mode = mpi_;
+    request.block = block_;
+    request.halo = halo_;
+    request.scene = &scene_;
+    request.variant = variant_;
+    request.cache_file = cache_file_;
+    request.threads = threads_;
+    request.contacts_out = contacts_out_;
+    request.json_out = json_out_;
+    request.command_line = command_line_;
+    request.check_options = [this] { check_mpi(); };
+    return run_detect_mpi(request);
+#else
+    throw InputError("this contactlab was built without MPI (--mpi " + mpi_ + ")");
+#endif
+  }
   check();
   const bool automatic = variant_ == "auto";
   const int threads = resolve_threads(threads_);

@@ -3,12 +3,30 @@
 #include <fmt/core.h>
 
 #include <CLI/CLI.hpp>
+#include <cstdlib>
 #include <new>
 #include <string>
 #include <vector>
 
 #include "cli_shared.hpp"
 #include "contactlab/kernels/error.hpp"
+
+namespace {
+
+// Whether this is a rank other than 0 of an MPI job asked for --mpi: it leaves messages that
+// every rank would print alike (command-line errors, found before MPI starts) to rank 0.
+bool quiet_mpi_rank(int argc, char** argv) {
+  bool mpi = false;
+  for (int i = 1; i < argc; ++i) mpi = mpi || std::string(argv[i]).rfind("--mpi", 0) == 0;
+  if (!mpi) return false;
+  for (const char* variable : {"OMPI_COMM_WORLD_RANK", "PMI_RANK", "PMIX_RANK", "SLURM_PROCID"}) {
+    const char* value = std::getenv(variable);
+    if (value) return std::string(value) != "0";
+  }
+  return false;
+}
+
+}  // namespace
 
 int main(int argc, char** argv) {
   namespace cli = contactlab::cli;
@@ -22,6 +40,7 @@ int main(int argc, char** argv) {
                                                  cli::add_variants_command(app),
                                                  cli::add_sweep_command(app, command_line),
                                                  cli::add_tune_command(app, command_line),
+                                                 cli::add_partition_command(app),
                                                  cli::add_demo_command(app),
                                                  cli::add_dem_command(app)};
 
@@ -32,7 +51,10 @@ int main(int argc, char** argv) {
     }
     return 0;  // unreachable: exactly one subcommand is required
   } catch (const CLI::ParseError& e) {
+    if (quiet_mpi_rank(argc, argv)) return e.get_exit_code();
     return app.exit(e);
+  } catch (const contactlab::ReportedElsewhere&) {
+    return 2;  // another MPI process printed the message
   } catch (const contactlab::InputError& e) {
     fmt::print(stderr, "contactlab: error: {}\n", e.what());
     return 2;

@@ -10,6 +10,7 @@
 #include "contactlab/kernels/error.hpp"
 #include "contactlab/tuner/auto_variant.hpp"
 #include "contactlab/tuner/tune.hpp"
+#include "detect_mpi.hpp"
 
 namespace contactlab::cli {
 namespace {
@@ -31,8 +32,12 @@ struct TuneCommand {
   int exhaustive_rounds_ = tn::TuneOptions{}.exhaustive_rounds;
   int verify_rounds_ = tn::TuneOptions{}.verify_rounds;
   std::string command_line_;
+  std::string mpi_;  // empty: no MPI (the default, whether or not under mpirun)
+  std::uint32_t block_ = 200;
+  double halo_ = 0.0;
 
   void add_to(CLI::App& sub);
+  void check() const;
   tn::TuneOptions options() const;
   int run() const;
 };
@@ -56,6 +61,16 @@ void TuneCommand::add_to(CLI::App& sub) {
   sub.add_option("--verify-rounds", verify_rounds_,
                  "rounds of the final verification (every choice timed once per round)")
       ->check(CLI::PositiveNumber);
+  sub.add_option("--mpi", mpi_,
+                 "tune each MPI rank's part (under mpirun): replicated (the paper) or decomposed");
+  sub.add_option("--block", block_, "--mpi replicated: block size of the block-cyclic deal");
+  sub.add_option("--halo", halo_,
+                 "--mpi decomposed: halo width (default D, or the largest diameter)");
+}
+
+void TuneCommand::check() const {
+  if (threads_ < 0) throw InputError("--threads must be >= 0");
+  if (max_chunk_ < 1) throw InputError("--max-chunk must be >= 1");
 }
 
 tn::TuneOptions TuneCommand::options() const {
@@ -98,8 +113,26 @@ void print_report(const tn::TuneDocument& report) {
 }
 
 int TuneCommand::run() const {
-  if (threads_ < 0) throw InputError("--threads must be >= 0");
-  if (max_chunk_ < 1) throw InputError("--max-chunk must be >= 1");
+  if (!mpi_.empty()) {
+#ifdef CONTACTLAB_HAVE_MPI
+    MpiTuneRequest request;
+    request.mode = mpi_;
+    request.block = block_;
+    request.halo = halo_;
+    request.scene = &scene_;
+    request.cache_file = cache_file_;
+    request.json_out = json_out_;
+    request.command_line = command_line_;
+    request.recalibrate = recalibrate_;
+    request.check_options = [this] { check(); };
+    request.options = [this] { return options(); };
+    request.print = print_report;
+    return run_tune_mpi(request);
+#else
+    throw InputError("this contactlab was built without MPI (--mpi " + mpi_ + ")");
+#endif
+  }
+  check();
   if (!json_out_.empty()) check_writable(json_out_);
   const tn::TuneOptions options = this->options();
   auto [scene, scene_record] = scene_.load();

@@ -156,7 +156,8 @@ void ContactDetector::detect(const CellGrid& grid, const Layout& layout, const P
   const std::uint32_t n = static_cast<std::uint32_t>(registry_.slot_particle.size());
   const int threads = run.threads;
   const bool half = variant.stencil == Stencil::kHalf;
-  const traversal::Spec spec{grid, registry_, variant.loop, variant.stencil, options.homes};
+  const traversal::Spec spec{grid,          registry_,     variant.loop, variant.stencil,
+                             options.homes, options.blocks};
 
   if (thread_partners_.size() < static_cast<std::size_t>(threads)) {
     thread_partners_.resize(threads);
@@ -164,7 +165,8 @@ void ContactDetector::detect(const CellGrid& grid, const Layout& layout, const P
   }
   found_count_.resize(n);
   // Ghosts are never homes: their own finds stay 0.
-  if (!spec.homes.covers(n)) std::fill(found_count_.begin(), found_count_.end(), 0u);
+  if (!spec.homes.covers(n) || !spec.blocks.all())
+    std::fill(found_count_.begin(), found_count_.end(), 0u);
   // Half stencil: reverse_count_[t * n + j] counts the finds (h, j) of thread t, later the
   // start of thread t's share of row j's reverse entries. Per-thread counts avoid atomics.
   if (half) reverse_count_.resize(std::size_t{n} * threads);
@@ -260,6 +262,10 @@ CellGrid ContactDetector::prepare(const Scene& scene, const DetectOptions& optio
     throw InputError("schedule " + to_string(schedule) + ": chunk size must be >= 1");
   }
   if (scene.size() >= UINT32_MAX) throw InputError("at most 2^32 - 2 particles are supported");
+  if (!options.blocks.all() && options.blocks.index >= options.blocks.count) {
+    throw InputError("home blocks: index " + std::to_string(options.blocks.index) +
+                     " is not below the count " + std::to_string(options.blocks.count));
+  }
   if (options.homes.first > options.homes.last) {
     throw InputError("home range: first " + std::to_string(options.homes.first) + " is past last " +
                      std::to_string(options.homes.last));
@@ -361,6 +367,15 @@ ContactList ContactDetector::neighbor_list(const Scene& scene, const DetectOptio
   return canonicalize(contacts_, working_to_input());
 }
 
+void ContactDetector::release_buffers() {
+  std::vector<detail::PartnerBuffer>().swap(thread_partners_);
+  std::vector<std::vector<std::uint32_t>>().swap(thread_homes_);
+  std::vector<std::uint32_t>().swap(found_count_);
+  std::vector<std::uint32_t>().swap(reverse_count_);
+  sorted_.x = sorted_.y = sorted_.z = sorted_.diameter = {};
+  narrow_x_ = narrow_y_ = narrow_z_ = narrow_d_ = {};
+}
+
 // The same traversal as run(), with an op that counts instead of testing.
 LoopWork ContactDetector::iteration_work(const Scene& scene, const DetectOptions& options) {
   DetectRun run;
@@ -375,10 +390,25 @@ LoopWork ContactDetector::iteration_work(const Scene& scene, const DetectOptions
   WorkCountOp op{work};
   // Only the cells are read: double coordinates in the working order, whatever the precision.
   with_layout(scene, Precision::kDouble, run, [&](const auto& layout) {
-    traversal::traverse({grid, registry_, variant.loop, variant.stencil, options.homes}, layout,
-                        op);
+    traversal::traverse(
+        {grid, registry_, variant.loop, variant.stencil, options.homes, options.blocks}, layout,
+        op);
   });
-  return work;
+  if (options.blocks.all()) return work;
+  // Loop order: the loop runs over this process's blocks only (k -> blocks.at(k)), so the
+  // schedule divides exactly those; the counts were kept by iteration id.
+  LoopWork mine;
+  const std::uint64_t size = options.blocks.size(iterations);
+  mine.tests.resize(size);
+  mine.homes.resize(size);
+  mine.builds.resize(size);
+  for (std::uint64_t k = 0; k < size; ++k) {
+    const std::uint64_t i = options.blocks.at(k);
+    mine.tests[k] = work.tests[i];
+    mine.homes[k] = work.homes[i];
+    mine.builds[k] = work.builds[i];
+  }
+  return mine;
 }
 
 }  // namespace contactlab

@@ -45,7 +45,7 @@ double Scene::max_diameter() const {
   return diameter.empty() ? 0.0 : *std::max_element(diameter.begin(), diameter.end());
 }
 
-void validate_scene(const Scene& scene, const std::string& source) {
+void validate_scene(const Scene& scene, const std::string& source, std::size_t first_row) {
   for (int axis = 0; axis < 3; ++axis) {
     if (!std::isfinite(scene.box.lo[axis]) || !std::isfinite(scene.box.hi[axis]) ||
         !(scene.box.hi[axis] > scene.box.lo[axis])) {
@@ -59,18 +59,18 @@ void validate_scene(const Scene& scene, const std::string& source) {
   for (std::size_t i = 0; i < scene.size(); ++i) {
     const double x = scene.x[i], y = scene.y[i], z = scene.z[i];
     if (!std::isfinite(x) || !std::isfinite(y) || !std::isfinite(z)) {
-      throw InputError(source + ": particle " + std::to_string(i) +
+      throw InputError(source + ": particle " + std::to_string(first_row + i) +
                        " has a NaN or infinite coordinate");
     }
     if (!scene.box.contains(x, y, z)) {
       std::ostringstream out;
       out.precision(17);
-      out << source << ": particle " << i << " at (" << x << ", " << y << ", " << z
+      out << source << ": particle " << first_row + i << " at (" << x << ", " << y << ", " << z
           << ") is outside the box";
       throw InputError(out.str());
     }
     if (!scene.diameter.empty() && !(scene.diameter[i] > 0.0 && std::isfinite(scene.diameter[i]))) {
-      throw InputError(source + ": particle " + std::to_string(i) +
+      throw InputError(source + ": particle " + std::to_string(first_row + i) +
                        " has a diameter that is not a positive finite number");
     }
   }

@@ -1,5 +1,6 @@
 #include "contactlab/kernels/scene_io.hpp"
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdint>
@@ -15,6 +16,7 @@ namespace {
 
 constexpr char kMagic[8] = {'C', 'L', 'S', 'C', 'E', 'N', 'E', '1'};
 constexpr std::uint32_t kBinaryVersion = 1;
+constexpr std::uint64_t kBinaryHeaderBytes = 8 + 4 + 4 + 8 + 48;
 
 std::ifstream open_input(const std::string& path, std::ios::openmode mode) {
   std::ifstream in(path, mode);
@@ -105,7 +107,7 @@ Scene read_text_scene(const std::string& path, const Box& box) {
   return scene;
 }
 
-Scene read_binary_scene(const std::string& path) {
+BinarySceneHeader read_binary_header(const std::string& path) {
   std::ifstream in = open_input(path, std::ios::binary);
   char magic[8];
   std::uint32_t version = 0, flags = 0;
@@ -127,34 +129,54 @@ Scene read_binary_scene(const std::string& path) {
   in.seekg(0, std::ios::end);
   const std::uint64_t size = static_cast<std::uint64_t>(in.tellg());
   const std::uint64_t arrays = flags & 1 ? 4 : 3;
-  constexpr std::uint64_t kHeader = 8 + 4 + 4 + 8 + 48;
-  if (n > (size - kHeader) / 8 || size != kHeader + arrays * 8 * n) {
+  if (n > (size - kBinaryHeaderBytes) / 8 || size != kBinaryHeaderBytes + arrays * 8 * n) {
     throw InputError(path + ": file size " + std::to_string(size) + " does not match N = " +
                      std::to_string(n) + " in its header (truncated or corrupt)");
   }
-  in.seekg(kHeader);
+  BinarySceneHeader header;
+  header.n = n;
+  header.diameters = (flags & 1) != 0;
+  header.box = Box{{bounds[0], bounds[1], bounds[2]}, {bounds[3], bounds[4], bounds[5]}};
+  return header;
+}
+
+Scene read_binary_rows(const std::string& path, const BinarySceneHeader& header,
+                       std::uint64_t first, std::uint64_t last) {
+  last = std::min(last, header.n);
+  first = std::min(first, last);
+  const std::uint64_t count = last - first;
+  std::ifstream in = open_input(path, std::ios::binary);
   Scene scene;
-  scene.box = Box{{bounds[0], bounds[1], bounds[2]}, {bounds[3], bounds[4], bounds[5]}};
-  for (auto* array : {&scene.x, &scene.y, &scene.z}) {
-    array->resize(n);
-    in.read(reinterpret_cast<char*>(array->data()), static_cast<std::streamsize>(8 * n));
-  }
-  if (flags & 1) {
-    scene.diameter.resize(n);
-    in.read(reinterpret_cast<char*>(scene.diameter.data()), static_cast<std::streamsize>(8 * n));
+  scene.box = header.box;
+  const int arrays = header.diameters ? 4 : 3;
+  for (int a = 0; a < arrays; ++a) {
+    std::vector<double>& array = a == 0   ? scene.x
+                                 : a == 1 ? scene.y
+                                 : a == 2 ? scene.z
+                                          : scene.diameter;
+    array.resize(count);
+    in.seekg(static_cast<std::streamoff>(kBinaryHeaderBytes + 8 * (a * header.n + first)));
+    in.read(reinterpret_cast<char*>(array.data()), static_cast<std::streamsize>(8 * count));
   }
   if (!in) throw InputError(path + ": read error");
-  validate_scene(scene, path);
+  validate_scene(scene, path, first);
   return scene;
 }
 
-Scene read_scene(const std::string& path, const Box& box) {
+Scene read_binary_scene(const std::string& path) {
+  const BinarySceneHeader header = read_binary_header(path);
+  return read_binary_rows(path, header, 0, header.n);
+}
+
+bool is_binary_scene(const std::string& path) {
   char magic[8] = {};
-  {
-    std::ifstream in = open_input(path, std::ios::binary);
-    in.read(magic, 8);
-  }
-  if (std::memcmp(magic, kMagic, 8) == 0) return read_binary_scene(path);
+  std::ifstream in = open_input(path, std::ios::binary);
+  in.read(magic, 8);
+  return std::memcmp(magic, kMagic, 8) == 0;
+}
+
+Scene read_scene(const std::string& path, const Box& box) {
+  if (is_binary_scene(path)) return read_binary_scene(path);
   return read_text_scene(path, box);
 }
 

@@ -56,6 +56,23 @@ TEST(TuneReport, RoundTripKeepsEveryField) {
   ASSERT_NE(back.method("search"), nullptr);
   EXPECT_EQ(back.method("search")->evaluations, 6);
   EXPECT_EQ(back.method("exhaustive"), nullptr);
+  EXPECT_FALSE(j.contains("mpi"));  // tune --mpi only
+}
+
+TEST(TuneReport, AnMpiTuneKeepsItsModeAndRanks) {
+  TuneDocument d = sample_document();
+  d.mpi = TuneMpi{"decomposed", 4, 0, 0.02};
+  const nlohmann::json j = to_json_value(d);
+  TuneDocument back;
+  read(JsonIn(j, "$"), back);
+  EXPECT_EQ(to_json_value(back), j);
+  ASSERT_TRUE(back.mpi.has_value());
+  EXPECT_EQ(back.mpi->mode, "decomposed");
+  EXPECT_EQ(back.mpi->ranks, 4);
+  nlohmann::json bad = j;
+  bad["mpi"]["nodes"] = 2;
+  TuneDocument d2;
+  EXPECT_THROW(read(JsonIn(bad, "$"), d2), InputError);
 }
 
 TEST(TuneReport, AMethodsOwnFieldsAppearOnlyWhereItHasThem) {

@@ -46,6 +46,26 @@ std::string rejection(const TuningCache& cache) {
   return "";
 }
 
+// An MPI run's choice (its setting: mode, ranks) is its own entry; a calibration sent between
+// processes as text reads back whole.
+TEST(TuningCache, ASettingKeepsChoicesApartAndACalibrationTravelsAsText) {
+  test::TempDir dir;
+  TuningCache cache(dir.file("tuning.json"));
+  const Variant serial = parse_variant("cell/morton/full/dynamic,64");
+  const Variant ranks4 = parse_variant("particle/sorted/full/static,8");
+  cache.store_choice(sample_scene(), 0.05, 2, serial, 0.25);
+  cache.store_choice(sample_scene(), 0.05, 2, ranks4, 0.25, "mpi decomposed, 4 ranks, halo 0.05");
+  EXPECT_EQ(cache.choice(sample_scene(), 0.05, 2), serial);
+  EXPECT_EQ(cache.choice(sample_scene(), 0.05, 2, "mpi decomposed, 4 ranks, halo 0.05"), ranks4);
+  EXPECT_FALSE(cache.choice(sample_scene(), 0.05, 2, "mpi decomposed, 3 ranks, halo 0.05"));
+  const Calibration back =
+      TuningCache::calibration_from_text(TuningCache::calibration_text(sample_calibration()));
+  EXPECT_EQ(back.threads, 2);
+  EXPECT_EQ(back.structures.at("particle/sorted/half").costs,
+            sample_calibration().structures.at("particle/sorted/half").costs);
+  EXPECT_THROW(TuningCache::calibration_from_text(R"({"seconds": 1})"), InputError);
+}
+
 TEST(TuningCache, StoredEntriesReadBack) {
   test::TempDir dir;
   TuningCache cache(dir.file("tuning.json"));

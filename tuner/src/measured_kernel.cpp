@@ -17,17 +17,42 @@ std::vector<double> MeasuredKernel::samples(const Variant& variant, int threads,
   return result;
 }
 
+DetectOptions DetectionKernel::options_for(const Variant& variant, int threads) const {
+  DetectOptions options{variant, diameter_, threads, nullptr};
+  options.homes = homes_;
+  options.blocks = blocks_;
+  return options;
+}
+
 KernelRun DetectionKernel::run(const Variant& variant, int threads) {
-  const DetectRun r = detector_.run(scene_, DetectOptions{variant, diameter_, threads, nullptr});
+  last_ = variant;
+  const DetectRun r = detector_.run(scene_, options_for(variant, threads));
   return {{{"setup", r.setup_s}, {"detect", r.detect_s}},
           {{"candidate_tests", r.candidate_tests}, {"contact_pairs", r.contact_pairs}}};
 }
 
 LoopWork DetectionKernel::iteration_work(const Variant& variant, int threads) {
-  return detector_.iteration_work(scene_, DetectOptions{variant, diameter_, threads, nullptr});
+  return detector_.iteration_work(scene_, options_for(variant, threads));
 }
 
 std::pair<std::uint64_t, std::uint64_t> DetectionKernel::wrong_results() {
+  if (restricted()) {
+    // Which pairs a part lists depends on its homes and on the loop, order and stencil: the
+    // reference is the same structure in double precision (the schedule changes nothing).
+    Variant exact = last_;
+    exact.precision = Precision::kDouble;
+    exact.schedule = Schedule{};
+    if (exact.precision == last_.precision) return {0, 0};
+    const std::string key = to_string(exact);
+    if (!have_reference_ || reference_structure_ != key) {
+      ContactDetector reference;
+      reference.run(scene_, options_for(exact, 0));
+      reference_ = reference.canonical_contacts();
+      reference_structure_ = key;
+      have_reference_ = true;
+    }
+    return contact_differences(reference_, detector_.canonical_contacts());
+  }
   if (!have_reference_) {
     // Its own detector, so that the last run's contacts stay in detector_.
     ContactDetector exact;

@@ -384,6 +384,43 @@ struct FieldTable<ContactCheck> {
 };
 
 template <>
+struct FieldTable<MpiRankRecord> {
+  using T = MpiRankRecord;
+  static constexpr auto kFields = std::tuple{
+      field("rank", &T::rank),
+      field("threads", &T::threads),
+      group("phases_s", field("read", &T::read_s), field("exchange", &T::exchange_s),
+            field("registration", &T::registration_s), field("detection", &T::detection_s),
+            field("output", &T::output_s), field("total", &T::total_s)),
+      field("owned_particles", &T::owned_particles),
+      field("halo_particles", &T::halo_particles),
+      field("halo_sent", &T::halo_sent),
+      field("halo_bytes", &T::halo_bytes),
+      field("migrated_in", &T::migrated_in),
+      field("candidate_tests", &T::candidate_tests),
+      field("contact_pairs", &T::contact_pairs),
+      field("peak_rss_bytes", &T::peak_rss_bytes)};
+};
+
+template <>
+struct FieldTable<MpiRecord> {
+  using T = MpiRecord;
+  static constexpr auto kFields = std::tuple{field("mode", &T::mode),
+                                             field("ranks", &T::ranks),
+                                             field("block", &T::block),
+                                             field("halo_width", &T::halo_width),
+                                             field("work_imbalance", &T::work_imbalance),
+                                             field("max_peak_rss_bytes", &T::max_peak_rss_bytes),
+                                             field("per_rank", &T::per_rank)};
+  static void validate(const JsonIn& in, const T& v) {
+    if (v.mode != "replicated" && v.mode != "decomposed")
+      in.fail("mode must be replicated or decomposed, got '" + v.mode + "'");
+    if (v.ranks < 1 || static_cast<std::size_t>(v.ranks) != v.per_rank.size())
+      in.fail("ranks does not match the number of per_rank entries");
+  }
+};
+
+template <>
 struct FieldTable<RunRecord> {
   using T = RunRecord;
   // phases and work_counts came later: files written before them read with both empty.
@@ -397,7 +434,8 @@ struct FieldTable<RunRecord> {
                  field("counters", &T::counters),
                  field("contact_check", &T::contact_check),
                  field("phases", &T::phases).may_be_absent(),
-                 field("work_counts", &T::work_counts).may_be_absent()};
+                 field("work_counts", &T::work_counts).may_be_absent(),
+                 field("mpi", &T::mpi).only_when_set()};
   static void validate(const JsonIn& in, const T& v) {
     const std::string status(to_string(v.status));
     if (v.status != RunStatus::kFailed) {
@@ -452,6 +490,8 @@ void read(const JsonIn& in, RunSamples& out) { read_record(in, out); }
 void read(const JsonIn& in, RunAggregates& out) { read_record(in, out); }
 void read(const JsonIn& in, RunWork& out) { read_record(in, out); }
 void read(const JsonIn& in, ContactCheck& out) { read_record(in, out); }
+void read(const JsonIn& in, MpiRankRecord& out) { read_record(in, out); }
+void read(const JsonIn& in, MpiRecord& out) { read_record(in, out); }
 void read(const JsonIn& in, RunRecord& out) { read_record(in, out); }
 void read(const JsonIn& in, ResultFile& out) { read_record(in, out); }
 

@@ -100,11 +100,19 @@ class Verification {
   std::size_t best_ = 0;
 };
 
-// Classic formulas for the structure that is tuned, as report entries.
-std::vector<ClassicEntry> classic_entries(const PricedStructure& structure, int threads) {
+// Classic formulas for the structure that is tuned, as report entries. A kernel of several
+// parts takes the first part's chunks (each part's come from its own work), so that all verify
+// the same variants.
+std::vector<ClassicEntry> classic_entries(MeasuredKernel& kernel, const PricedStructure& structure,
+                                          int threads) {
   std::vector<ClassicEntry> classic;
   const WorkView work{structure.work.tests, structure.work.homes, structure.work.builds};
-  for (const NamedChunk& c : classic_chunks(work, threads, structure.costs)) {
+  std::vector<NamedChunk> chunks = classic_chunks(work, threads, structure.costs);
+  std::vector<int> k;
+  for (const NamedChunk& c : chunks) k.push_back(c.chunk);
+  kernel.from_first_part(k);
+  for (std::size_t i = 0; i < chunks.size(); ++i) chunks[i].chunk = k[i];
+  for (const NamedChunk& c : chunks) {
     ClassicEntry entry;
     entry.name = c.name;
     entry.chunk = c.chunk;
@@ -143,7 +151,7 @@ TuneReport tune_kernel(MeasuredKernel& kernel, const SceneRecord& scene,
     report.methods.push_back(method->choose(state));
   }
   const PricedStructure& tuned = state.tuned ? *state.tuned : *state.model_best;
-  report.classic = classic_entries(tuned, threads);
+  report.classic = classic_entries(kernel, tuned, threads);
   // What --variant auto uses: the last choice (the search's; the model's with predict_only).
   result.chosen = state.choices.back().second;
   if (options.predict_only) return result;

@@ -97,6 +97,14 @@ void check_tune_version(const JsonIn& at, const int& version) {
 }  // namespace
 
 template <>
+struct FieldTable<TuneMpi> {
+  using T = TuneMpi;
+  static constexpr auto kFields =
+      std::tuple{field("mode", &T::mode), field("ranks", &T::ranks), field("block", &T::block),
+                 field("halo_width", &T::halo_width)};
+};
+
+template <>
 struct FieldTable<TuneDocument> {
   using T = TuneDocument;
   static constexpr auto kFields =
@@ -110,7 +118,8 @@ struct FieldTable<TuneDocument> {
                  field("methods", &T::methods),
                  field("classic", &T::classic),
                  field("predictions", &T::predictions),
-                 field("verification", &T::verification).only_when_set()};
+                 field("verification", &T::verification).only_when_set(),
+                 field("mpi", &T::mpi).only_when_set()};
   static void validate(const JsonIn& in, const T& v) {
     if (v.methods.empty()) in.fail("no tuning method ran");
     for (const Prediction& p : v.predictions) {

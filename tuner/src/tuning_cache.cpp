@@ -32,9 +32,12 @@ std::string machine_key() {
   return fmt::format("{}|{} cpus|{}|{}", m.cpu_model, m.pus, b.flags, b.git_commit);
 }
 
-std::string choice_key(const SceneRecord& scene, double diameter, int threads) {
-  return fmt::format("{}|{}|{}|{:.17g}|{}", machine_key(), scene.checksum, scene.n, diameter,
-                     threads);
+std::string choice_key(const SceneRecord& scene, double diameter, int threads,
+                       const std::string& setting) {
+  std::string key =
+      fmt::format("{}|{}|{}|{:.17g}|{}", machine_key(), scene.checksum, scene.n, diameter, threads);
+  if (!setting.empty()) key += "|" + setting;
+  return key;
 }
 
 struct CachedCalibration {
@@ -173,21 +176,37 @@ void TuningCache::store_calibration(const Calibration& calibration) {
   save(document);
 }
 
-std::optional<Variant> TuningCache::choice(const SceneRecord& scene, double diameter,
-                                           int threads) const {
+std::optional<Variant> TuningCache::choice(const SceneRecord& scene, double diameter, int threads,
+                                           const std::string& setting) const {
   const json document = load();
-  const std::string key = choice_key(scene, diameter, threads);
+  const std::string key = choice_key(scene, diameter, threads, setting);
   const auto it = document["choices"].find(key);
   if (it == document["choices"].end()) return std::nullopt;
   return parse_variant(read_entry<CachedChoice>(path_, *it, "$.choices." + key).variant);
 }
 
 void TuningCache::store_choice(const SceneRecord& scene, double diameter, int threads,
-                               const Variant& variant, double seconds) {
+                               const Variant& variant, double seconds, const std::string& setting) {
   json document = load();
-  document["choices"][choice_key(scene, diameter, threads)] =
+  document["choices"][choice_key(scene, diameter, threads, setting)] =
       to_json_value(CachedChoice{to_string(variant), seconds});
   save(document);
+}
+
+std::string TuningCache::calibration_text(const Calibration& calibration) {
+  return to_json_value(CachedCalibration{kCostModelVersion, calibration.seconds,
+                                         calibration.threads, calibration.structures})
+      .dump();
+}
+
+Calibration TuningCache::calibration_from_text(const std::string& text) {
+  const auto cached = read_entry<CachedCalibration>("calibration", json::parse(text), "$");
+  Calibration c;
+  c.source = "cache";
+  c.seconds = cached.seconds;
+  c.threads = cached.threads;
+  c.structures = cached.structures;
+  return c;
 }
 
 }  // namespace contactlab::tuner

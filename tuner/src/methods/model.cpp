@@ -3,6 +3,7 @@
 // schedules simulated, schedule_model.hpp); its cost is the work profiles.
 #include <omp.h>
 
+#include <array>
 #include <limits>
 
 #include "contactlab/kernels/error.hpp"
@@ -13,18 +14,45 @@ namespace {
 
 WorkView view_of(const LoopWork& work) { return {work.tests, work.homes, work.builds}; }
 
-// The model's best schedule for one structure: every kind, every chunk of the grid.
-std::pair<Variant, double> best_schedule(const Variant& structure, WorkView work, int threads,
-                                         const MachineCosts& costs, const std::vector<int>& grid) {
-  std::pair<Variant, double> best{structure, std::numeric_limits<double>::infinity()};
+// The model's best schedule for one structure: every kind, every chunk of the grid. A kernel
+// run by several processes (MPI ranks, each on its own work) is as fast as its slowest: each
+// prediction is the maximum over the kernel's parts before the choice, so every part chooses
+// alike.
+std::pair<Variant, double> best_schedule(MeasuredKernel& kernel, const Variant& structure,
+                                         WorkView work, int threads, const MachineCosts& costs,
+                                         const std::vector<int>& grid) {
   const PreparedWork prepared(work);
-  for (const auto kind : {ScheduleKind::kStatic, ScheduleKind::kDynamic, ScheduleKind::kGuided}) {
+  const std::array kinds{ScheduleKind::kStatic, ScheduleKind::kDynamic, ScheduleKind::kGuided};
+  std::vector<std::vector<int>> chunks;
+  std::vector<double> seconds;
+  for (const auto kind : kinds) {
     std::vector<int> candidates = grid;
     if (kind == ScheduleKind::kStatic) candidates.insert(candidates.begin(), 0);  // block
-    const ChunkPrediction p = predict_best_chunk(prepared, threads, kind, costs, candidates);
-    if (p.best_seconds < best.second) {
-      best = {with_schedule(structure, kind, p.best_chunk), p.best_seconds};
+    for (const CandidatePrediction& c :
+         predict_best_chunk(prepared, threads, kind, costs, candidates).candidates) {
+      seconds.push_back(c.predicted_seconds);
     }
+    chunks.push_back(std::move(candidates));
+  }
+  kernel.max_over_parts(seconds);
+  // Within a kind the fastest, equal times preferring the larger chunk (block the largest), as
+  // predict_best_chunk; across kinds the first fastest.
+  auto locality_rank = [](int chunk) {
+    return chunk == 0 ? std::numeric_limits<long long>::max() : static_cast<long long>(chunk);
+  };
+  std::pair<Variant, double> best{structure, std::numeric_limits<double>::infinity()};
+  std::size_t at = 0;
+  for (std::size_t k = 0; k < kinds.size(); ++k) {
+    int best_chunk = chunks[k].front();
+    double best_s = seconds[at];
+    for (const int chunk : chunks[k]) {
+      const double s = seconds[at++];
+      if (s < best_s || (s == best_s && locality_rank(chunk) > locality_rank(best_chunk))) {
+        best_chunk = chunk;
+        best_s = s;
+      }
+    }
+    if (best_s < best.second) best = {with_schedule(structure, kinds[k], best_chunk), best_s};
   }
   return best;
 }
@@ -44,8 +72,8 @@ class ModelMethod final : public TuningMethod {
           structure, state.kernel.iteration_work(structure, state.threads),
           found != state.calibration.structures.end() ? found->second.costs : MachineCosts{},
           structure, 0.0};
-      std::tie(s.model_choice, s.predicted_s) =
-          best_schedule(structure, view_of(s.work), state.threads, s.costs, options.chunk_grid);
+      std::tie(s.model_choice, s.predicted_s) = best_schedule(
+          state.kernel, structure, view_of(s.work), state.threads, s.costs, options.chunk_grid);
       table.push_back({{"variant", to_string(s.model_choice)}, {"predicted_s", s.predicted_s}});
       state.structures.push_back(std::move(s));
     }
@@ -60,8 +88,8 @@ class ModelMethod final : public TuningMethod {
     // Other thread counts, from the model's structure.
     const PricedStructure& best = *state.model_best;
     for (const int p : options.predict_threads) {
-      const auto [variant, seconds] =
-          best_schedule(best.variant, view_of(best.work), p, best.costs, options.chunk_grid);
+      const auto [variant, seconds] = best_schedule(state.kernel, best.variant, view_of(best.work),
+                                                    p, best.costs, options.chunk_grid);
       state.report.predictions.push_back(
           {p, to_string(variant), seconds,
            p > omp_get_num_procs() ? "predicted (model only: more threads than this machine has)"

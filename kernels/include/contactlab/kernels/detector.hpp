@@ -77,13 +77,41 @@ struct HomeRange {
   bool covers(std::uint32_t n) const { return first == 0 && last >= n; }
 };
 
+// The detection loop's iterations one process visits when several share the loop (the paper's
+// replicated MPI): blocks of `block` consecutive iterations (working ids for the particle loop,
+// i.e. reordered particles with the sorted orders; cell keys for the cell loop) dealt
+// round-robin to `count` processes, this one being `index`. block = 0: every iteration. The
+// threads of the process share its iterations with the variant's schedule.
+struct HomeBlocks {
+  std::uint32_t block = 0;
+  std::uint32_t count = 1;
+  std::uint32_t index = 0;
+  bool all() const { return block == 0 || count <= 1; }
+  // How many of the iterations [0, total) are this process's.
+  std::uint64_t size(std::uint64_t total) const {
+    if (all()) return total;
+    const std::uint64_t round = std::uint64_t{block} * count;
+    const std::uint64_t full = total / round;
+    const std::uint64_t rest = total - full * round;
+    const std::uint64_t start = std::uint64_t{index} * block;
+    const std::uint64_t tail = rest > start ? std::min<std::uint64_t>(rest - start, block) : 0;
+    return full * block + tail;
+  }
+  // The k-th of them.
+  std::uint64_t at(std::uint64_t k) const {
+    if (all()) return k;
+    return (k / block) * block * count + std::uint64_t{index} * block + k % block;
+  }
+};
+
 struct DetectOptions {
   Variant variant;
   // Contact diameter D for scenes without per-particle diameters; ignored otherwise.
   double diameter = 0.0;
   int threads = 0;  // 0 = resolve_threads(0)
   DetectionObserver* observer = nullptr;
-  HomeRange homes{};  // default: every particle is owned
+  HomeRange homes{};    // default: every particle is owned
+  HomeBlocks blocks{};  // default: every iteration of the loop is this process's
 };
 
 struct DetectRun {
@@ -116,7 +144,9 @@ class ContactDetector {
   // What each iteration of the variant's parallel loop (a particle, or a cell with all its
   // particles) will do, in loop order: the exact work a schedule distributes among threads,
   // known from the cell occupancy before any pair is tested. The tuner's zero-run model reads
-  // it. Costs one registration and a pass over the stencils.
+  // it. Costs one registration and a pass over the stencils. With HomeBlocks, the process's
+  // iterations only (the k-th entry is iteration blocks.at(k)), as its loop runs them; with a
+  // HomeRange, every iteration, those without an owned home counting none.
   LoopWork iteration_work(const Scene& scene, const DetectOptions& options);
 
   // Half neighbour list for DEM: every pair within r_i + r_j + skin (D + skin without
@@ -128,6 +158,11 @@ class ContactDetector {
   // schedule and precision; always the full stencil (the half one would miss owned-ghost
   // pairs, see HomeRange). Replaces contacts(). Throws InputError for skin < 0.
   ContactList neighbor_list(const Scene& scene, const DetectOptions& options, double skin);
+
+  // Frees the buffers kept between runs for speed (per-thread partner lists and bookkeeping,
+  // the reordered and single-precision copies), keeping contacts() and working_to_input():
+  // for a caller that next needs the memory (the MPI output). The next run reallocates them.
+  void release_buffers();
 
   // Contacts of the last run in working ids (see working_to_input()).
   const ContactList& contacts() const { return contacts_; }

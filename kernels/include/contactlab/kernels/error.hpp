@@ -14,3 +14,14 @@ class InputError : public std::runtime_error {
 };
 
 }  // namespace contactlab
+
+namespace contactlab {
+
+// An error another process of the same MPI run has already reported: this process exits
+// non-zero without printing, so that a failure seen by one rank prints one message.
+class ReportedElsewhere : public std::runtime_error {
+ public:
+  ReportedElsewhere() : std::runtime_error("reported by another process") {}
+};
+
+}  // namespace contactlab

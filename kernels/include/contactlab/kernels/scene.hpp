@@ -36,8 +36,9 @@ struct Scene {
 
 // Throws InputError for a box that is not a positive volume, a NaN or infinite value, a
 // coordinate outside the box (the closed box: x == hi is inside) or a diameter <= 0.
-// `source` names where the scene came from, for the message.
-void validate_scene(const Scene& scene, const std::string& source);
+// `source` names where the scene came from, for the message; `first_row` is the input row of
+// the scene's first particle (a share of a larger file), so messages name the file's row.
+void validate_scene(const Scene& scene, const std::string& source, std::size_t first_row = 0);
 
 // FNV-1a over the bit patterns of the box, coordinates and diameters: equal exactly when
 // the scenes are bit-identical. Used to record file scenes and to test reproducibility.

@@ -12,6 +12,7 @@
 //   double[N]   x, then double[N] y, double[N] z, then double[N] d when flagged
 #pragma once
 
+#include <cstdint>
 #include <string>
 
 #include "contactlab/kernels/scene.hpp"
@@ -25,6 +26,18 @@ Scene read_scene(const std::string& path, const Box& box);
 
 Scene read_text_scene(const std::string& path, const Box& box);
 Scene read_binary_scene(const std::string& path);
+bool is_binary_scene(const std::string& path);  // the file starts with the binary magic
+
+// A binary scene read in parts (each MPI process its share): the header, checked against the
+// file size, then the rows [first, last) (clamped to N), validated with their file row numbers.
+struct BinarySceneHeader {
+  std::uint64_t n = 0;
+  bool diameters = false;
+  Box box;
+};
+BinarySceneHeader read_binary_header(const std::string& path);
+Scene read_binary_rows(const std::string& path, const BinarySceneHeader& header,
+                       std::uint64_t first, std::uint64_t last);
 
 // Write through a temporary file renamed into place: an existing file survives a failure.
 void write_binary_scene(const Scene& scene, const std::string& path);

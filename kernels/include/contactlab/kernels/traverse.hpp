@@ -152,7 +152,8 @@ struct Spec {
   const CellRegistry& registry;
   LoopKind loop;
   Stencil stencil;
-  HomeRange homes;  // input rows; every registered particle is a candidate
+  HomeRange homes;      // input rows; every registered particle is a candidate
+  HomeBlocks blocks{};  // the loop iterations this process visits (all by default)
 };
 
 // One visit of a home particle, as an op sees it.
@@ -207,8 +208,11 @@ void traverse_with(const Spec& spec, const Layout& layout, Op& op) {
   };
   if (spec.loop == LoopKind::kParticle) {
     std::uint32_t cached_key = UINT32_MAX;  // ranges are reused while the cell stays the same
+    // Only this process's iterations enter the loop, so its threads' schedule divides them.
+    const std::uint64_t iterations = spec.blocks.size(n);
 #pragma omp for schedule(runtime) nowait
-    for (std::uint32_t h = 0; h < n; ++h) {
+    for (std::uint64_t k = 0; k < iterations; ++k) {
+      const auto h = static_cast<std::uint32_t>(spec.blocks.at(k));
       if (!all_owned && !spec.homes.contains(layout.input_of(h))) continue;
       const auto home = grid.coords_of(layout.cell_x[h], layout.cell_y[h], layout.cell_z[h]);
       const std::uint32_t key = grid.key(home[0], home[1], home[2]);
@@ -220,9 +224,10 @@ void traverse_with(const Spec& spec, const Layout& layout, Op& op) {
       visit(h, layout.slot_of(h), h, built);
     }
   } else {
-    const std::uint64_t keys = grid.key_count();
+    const std::uint64_t iterations = spec.blocks.size(grid.key_count());
 #pragma omp for schedule(runtime) nowait
-    for (std::uint64_t key = 0; key < keys; ++key) {
+    for (std::uint64_t k = 0; k < iterations; ++k) {
+      const std::uint64_t key = spec.blocks.at(k);
       const std::uint32_t begin = registry.cell_begin[key];
       const std::uint32_t end = registry.cell_begin[key + 1];
       if (begin == end) continue;

@@ -5,6 +5,7 @@
 #pragma once
 
 #include <cstdint>
+#include <span>
 #include <string>
 #include <string_view>
 #include <utility>
@@ -35,15 +36,31 @@ class MeasuredKernel {
   // Results of the last run that differ from the exact reference: {missing, extra}.
   virtual std::pair<std::uint64_t, std::uint64_t> wrong_results() = 0;
 
+  // A kernel run by several processes together (MPI ranks, each on its own part) is as fast as
+  // its slowest part, and every part must take the same decisions (the same runs in the same
+  // order). The tuner passes what it decides by but does not measure through these: predicted
+  // times (replaced by their maximum over the parts) and values computed from a part's own work
+  // (replaced by the first part's). A kernel of one process leaves them as they are; run() and
+  // wrong_results() of a kernel of several return what holds for all its parts.
+  virtual void max_over_parts(std::span<double> /*values*/) {}
+  virtual void from_first_part(std::span<int> /*values*/) {}
+
   // `count` timed runs of the tuned phase (after whatever warm-up the caller did).
   std::vector<double> samples(const Variant& variant, int threads, int count);
 };
 
 // Contact detection of one scene: phases "setup" (T_s) and "detect" (T_c, tuned); counts
 // "candidate_tests" and "contact_pairs"; the reference is the exact particle/sorted/half run.
+//
+// `base` restricts the homes (HomeRange, HomeBlocks: one MPI rank's part of the detection; its
+// variant, diameter and threads are ignored); the reference then has the same homes and the
+// variant's loop, order and stencil (which decide, with homes, which pairs a part lists), so
+// only single precision can differ from it.
 class DetectionKernel final : public MeasuredKernel {
  public:
   DetectionKernel(const Scene& scene, double diameter) : scene_(scene), diameter_(diameter) {}
+  DetectionKernel(const Scene& scene, double diameter, const DetectOptions& base)
+      : scene_(scene), diameter_(diameter), homes_(base.homes), blocks_(base.blocks) {}
   std::string_view name() const override { return "contact_detection"; }
   std::string_view tuned_phase() const override { return "detect"; }
   KernelRun run(const Variant& variant, int threads) override;
@@ -51,10 +68,19 @@ class DetectionKernel final : public MeasuredKernel {
   std::pair<std::uint64_t, std::uint64_t> wrong_results() override;
 
  private:
+  DetectOptions options_for(const Variant& variant, int threads) const;
+  bool restricted() const {
+    return homes_.first != 0 || homes_.last != UINT32_MAX || blocks_.block;
+  }
+
   const Scene& scene_;
   double diameter_;
+  HomeRange homes_{};
+  HomeBlocks blocks_{};
   ContactDetector detector_;
   ContactList reference_;
+  std::string reference_structure_;  // restricted homes: the structure of the reference
+  Variant last_;                     // the variant of the last run
   bool have_reference_ = false;
 };
 

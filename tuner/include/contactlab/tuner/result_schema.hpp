@@ -86,6 +86,34 @@ struct ContactCheck {
   std::uint64_t extra_pairs = 0;
 };
 
+// One MPI process of a `detect --mpi` run: its phases (seconds) and loads.
+struct MpiRankRecord {
+  int rank = 0;
+  int threads = 0;
+  double read_s = 0.0, exchange_s = 0.0, registration_s = 0.0, detection_s = 0.0, output_s = 0.0,
+         total_s = 0.0;
+  std::uint64_t owned_particles = 0;  // replicated: every particle
+  std::uint64_t halo_particles = 0;   // ghosts received (decomposed)
+  std::uint64_t halo_sent = 0;        // copies sent as other ranks' ghosts
+  std::uint64_t halo_bytes = 0;       // bytes received in the halo exchange
+  std::uint64_t migrated_in = 0;      // particles received from other ranks' reads
+  std::uint64_t candidate_tests = 0;  // the rank's work
+  std::uint64_t contact_pairs = 0;    // contacts it emitted (each contact by one rank)
+  std::uint64_t peak_rss_bytes = 0;   // getrusage maximum resident set
+};
+
+// How a `detect --mpi` run was spread: the mode, its parameters, every rank, and the maxima
+// over ranks (the run's times are the slowest rank's).
+struct MpiRecord {
+  std::string mode;  // replicated or decomposed
+  int ranks = 1;
+  std::uint32_t block = 0;  // replicated: block of the block-cyclic deal (0 in decomposed)
+  double halo_width = 0.0;  // decomposed: halo width = the partition's cell width (0 replicated)
+  double work_imbalance = 0.0;  // max / mean - 1 of candidate_tests over ranks
+  std::uint64_t max_peak_rss_bytes = 0;
+  std::vector<MpiRankRecord> per_rank;
+};
+
 struct RunRecord {
   RunStatus status = RunStatus::kOk;
   std::string message;  // empty when ok
@@ -102,6 +130,7 @@ struct RunRecord {
   // written before they existed (read as empty).
   std::map<std::string, Summary> phases;
   std::map<std::string, std::uint64_t> work_counts;
+  std::optional<MpiRecord> mpi;  // detect --mpi only (absent otherwise)
 };
 
 struct ResultFile {
@@ -140,6 +169,8 @@ void read(const JsonIn& in, RunSamples& out);
 void read(const JsonIn& in, RunAggregates& out);
 void read(const JsonIn& in, RunWork& out);
 void read(const JsonIn& in, ContactCheck& out);
+void read(const JsonIn& in, MpiRankRecord& out);
+void read(const JsonIn& in, MpiRecord& out);
 void read(const JsonIn& in, RunRecord& out);
 void read(const JsonIn& in, ResultFile& out);
 

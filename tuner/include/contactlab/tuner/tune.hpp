@@ -100,9 +100,17 @@ class TuningCache {
 
   std::optional<Calibration> calibration() const;
   void store_calibration(const Calibration& calibration);
-  std::optional<Variant> choice(const SceneRecord& scene, double diameter, int threads) const;
+  // `setting` (empty for one process) tells runs of the same scene apart that divide it
+  // otherwise, e.g. "mpi decomposed, 4 ranks, halo 0.01": their choices are separate entries.
+  std::optional<Variant> choice(const SceneRecord& scene, double diameter, int threads,
+                                const std::string& setting = {}) const;
   void store_choice(const SceneRecord& scene, double diameter, int threads, const Variant& variant,
-                    double seconds);
+                    double seconds, const std::string& setting = {});
+
+  // A calibration as the cache stores it (JSON text) and back, strictly: for processes that
+  // share one calibration without each reading the file (MPI ranks).
+  static std::string calibration_text(const Calibration& calibration);
+  static Calibration calibration_from_text(const std::string& text);
 
  private:
   nlohmann::json load() const;

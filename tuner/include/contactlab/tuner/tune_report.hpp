@@ -89,6 +89,15 @@ struct CalibrationSummary {
   double seconds = 0.0;
 };
 
+// `tune --mpi` (docs/mpi.md): the ranks ran the kernel together, each on its own part; every
+// time in the document is the slowest rank's.
+struct TuneMpi {
+  std::string mode;  // replicated or decomposed
+  int ranks = 1;
+  std::uint32_t block = 0;  // replicated: block of the block-cyclic deal (0 in decomposed)
+  double halo_width = 0.0;  // decomposed: the partition's cell width (0 in replicated)
+};
+
 struct TuneDocument {
   int schema_version = kTuneSchemaVersion;
   Context context;
@@ -101,6 +110,7 @@ struct TuneDocument {
   std::vector<ClassicEntry> classic;
   std::vector<Prediction> predictions;
   std::optional<VerificationSummary> verification;  // absent with --predict-only
+  std::optional<TuneMpi> mpi;                       // tune --mpi only
 
   const MethodEntry* method(const std::string& name) const;  // nullptr when it did not run
 };
