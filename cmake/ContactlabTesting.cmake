@@ -18,13 +18,20 @@ function(contactlab_add_gtest name)
   target_include_directories(${name} PRIVATE ${CMAKE_CURRENT_SOURCE_DIR}
                                              ${PROJECT_SOURCE_DIR}/tests/common)
   math(EXPR timeout "${ARG_TIMEOUT} * ${CONTACTLAB_TEST_TIME_SCALE}")
-  set(environment)
+  gtest_discover_tests(${name} DISCOVERY_TIMEOUT 60 PROPERTIES TIMEOUT ${timeout} ${ARG_PROPERTIES})
+  # gtest_discover_tests splits every property value at ';', so a second label or a second
+  # variable would become a property name and shift the rest. The list-valued properties are
+  # set by a script CTest includes after the discovered tests (<name>_TESTS lists them).
+  set(list_properties "${CMAKE_CURRENT_BINARY_DIR}/${name}_list_properties.cmake")
+  file(WRITE "${list_properties}"
+       "foreach(test IN LISTS ${name}_TESTS)\n"
+       "  set_tests_properties(\"\${test}\" PROPERTIES LABELS \"${ARG_LABELS}\")\n")
   if(ARG_ENVIRONMENT)
-    set(environment ENVIRONMENT "${ARG_ENVIRONMENT}")
+    file(APPEND "${list_properties}"
+         "  set_tests_properties(\"\${test}\" PROPERTIES ENVIRONMENT \"${ARG_ENVIRONMENT}\")\n")
   endif()
-  gtest_discover_tests(${name}
-    DISCOVERY_TIMEOUT 60
-    PROPERTIES LABELS "${ARG_LABELS}" TIMEOUT ${timeout} ${environment} ${ARG_PROPERTIES})
+  file(APPEND "${list_properties}" "endforeach()\n")
+  set_property(DIRECTORY APPEND PROPERTY TEST_INCLUDE_FILES "${list_properties}")
 endfunction()
 
 # Tests that run the contactlab programs know where they are, where the sources are (docs and
