@@ -206,42 +206,51 @@ void traverse_with(const Spec& spec, const Layout& layout, Op& op) {
     if constexpr (Op::kTestsPairs) for_each_candidate<kHalf>(layout, nb, h, s_h, sink);
     op.end_home(home, sink);
   };
-  if (spec.loop == LoopKind::kParticle) {
-    std::uint32_t cached_key = UINT32_MAX;  // ranges are reused while the cell stays the same
-    // Only this process's iterations enter the loop, so its threads' schedule divides them.
-    const std::uint64_t iterations = spec.blocks.size(n);
+  // The loop iteration -> particle (or cell key) map is chosen outside the loop, so the
+  // single-process loop carries no block arithmetic (most cell-loop iterations are empty).
+  auto loops = [&](auto iteration_at) {
+    if (spec.loop == LoopKind::kParticle) {
+      std::uint32_t cached_key = UINT32_MAX;  // ranges are reused while the cell stays the same
+      // Only this process's iterations enter the loop, so its threads' schedule divides them.
+      const std::uint64_t iterations = spec.blocks.size(n);
 #pragma omp for schedule(runtime) nowait
-    for (std::uint64_t k = 0; k < iterations; ++k) {
-      const auto h = static_cast<std::uint32_t>(spec.blocks.at(k));
-      if (!all_owned && !spec.homes.contains(layout.input_of(h))) continue;
-      const auto home = grid.coords_of(layout.cell_x[h], layout.cell_y[h], layout.cell_z[h]);
-      const std::uint32_t key = grid.key(home[0], home[1], home[2]);
-      const bool built = key != cached_key;
-      if (built) {
-        nb.build(grid, registry, stencil, home);
-        cached_key = key;
-      }
-      visit(h, layout.slot_of(h), h, built);
-    }
-  } else {
-    const std::uint64_t iterations = spec.blocks.size(grid.key_count());
-#pragma omp for schedule(runtime) nowait
-    for (std::uint64_t k = 0; k < iterations; ++k) {
-      const std::uint64_t key = spec.blocks.at(k);
-      const std::uint32_t begin = registry.cell_begin[key];
-      const std::uint32_t end = registry.cell_begin[key + 1];
-      if (begin == end) continue;
-      const std::uint32_t first = layout.particle_at(begin);
-      nb.build(grid, registry, stencil,
-               grid.coords_of(layout.cell_x[first], layout.cell_y[first], layout.cell_z[first]));
-      bool built = true;  // reported with the cell's first home
-      for (std::uint32_t s = begin; s < end; ++s) {
-        const std::uint32_t h = layout.particle_at(s);
+      for (std::uint64_t k = 0; k < iterations; ++k) {
+        const auto h = static_cast<std::uint32_t>(iteration_at(k));
         if (!all_owned && !spec.homes.contains(layout.input_of(h))) continue;
-        visit(h, s, key, built);
-        built = false;
+        const auto home = grid.coords_of(layout.cell_x[h], layout.cell_y[h], layout.cell_z[h]);
+        const std::uint32_t key = grid.key(home[0], home[1], home[2]);
+        const bool built = key != cached_key;
+        if (built) {
+          nb.build(grid, registry, stencil, home);
+          cached_key = key;
+        }
+        visit(h, layout.slot_of(h), h, built);
+      }
+    } else {
+      const std::uint64_t iterations = spec.blocks.size(grid.key_count());
+#pragma omp for schedule(runtime) nowait
+      for (std::uint64_t k = 0; k < iterations; ++k) {
+        const std::uint64_t key = iteration_at(k);
+        const std::uint32_t begin = registry.cell_begin[key];
+        const std::uint32_t end = registry.cell_begin[key + 1];
+        if (begin == end) continue;
+        const std::uint32_t first = layout.particle_at(begin);
+        nb.build(grid, registry, stencil,
+                 grid.coords_of(layout.cell_x[first], layout.cell_y[first], layout.cell_z[first]));
+        bool built = true;  // reported with the cell's first home
+        for (std::uint32_t s = begin; s < end; ++s) {
+          const std::uint32_t h = layout.particle_at(s);
+          if (!all_owned && !spec.homes.contains(layout.input_of(h))) continue;
+          visit(h, s, key, built);
+          built = false;
+        }
       }
     }
+  };
+  if (spec.blocks.all()) {
+    loops([](std::uint64_t k) { return k; });
+  } else {
+    loops([&](std::uint64_t k) { return spec.blocks.at(k); });
   }
 }
 
