@@ -49,45 +49,6 @@ class Reader {
   std::string path_;
 };
 
-template <class F>
-void for_each_array(Particles& p, F f) {
-  f(p.id);
-  f(p.material);
-  f(p.contacts);
-  for (auto* v : {&p.x,
-                  &p.y,
-                  &p.z,
-                  &p.vx,
-                  &p.vy,
-                  &p.vz,
-                  &p.wx,
-                  &p.wy,
-                  &p.wz,
-                  &p.pvx,
-                  &p.pvy,
-                  &p.pvz,
-                  &p.pwx,
-                  &p.pwy,
-                  &p.pwz,
-                  &p.fx,
-                  &p.fy,
-                  &p.fz,
-                  &p.tx,
-                  &p.ty,
-                  &p.tz,
-                  &p.radius,
-                  &p.mass,
-                  &p.inv_mass,
-                  &p.inv_inertia,
-                  &p.x0,
-                  &p.y0,
-                  &p.z0,
-                  &p.force_magnitude}) {
-    f(*v);
-  }
-  for (auto& v : p.wall_spring) f(v);
-}
-
 }  // namespace
 
 void write_checkpoint(const Engine& engine, int frames, const std::string& path) {
@@ -95,7 +56,7 @@ void write_checkpoint(const Engine& engine, int frames, const std::string& path)
       path,
       [&](std::ostream& out) {
         out.write(kMagic, sizeof kMagic);
-        Particles p = engine.particles();
+        const Particles& p = engine.particles();
         const PairList& q = engine.pairs();
         const Engine::State s = engine.state();
         put<std::uint64_t>(out, p.size());
@@ -107,7 +68,7 @@ void write_checkpoint(const Engine& engine, int frames, const std::string& path)
         put(out, s.rebuilds);
         put(out, s.large_overlaps);
         put(out, s.initial_energy);
-        for_each_array(p, [&](const auto& v) { put_array(out, v); });
+        p.for_each_array([&](const auto& v) { put_array(out, v); });
         put_array(out, q.i);
         put_array(out, q.j);
         put_array(out, q.image);
@@ -143,7 +104,7 @@ int read_checkpoint(Engine& engine, const std::string& path) {
   s.large_overlaps = in.get<std::uint64_t>();
   s.initial_energy = in.get<double>();
   Particles p = engine.particles();
-  for_each_array(p, [&](auto& v) { in.array(v, n); });
+  p.for_each_array([&](auto& v) { in.array(v, n); });
   PairList q;
   in.array(q.i, pairs);
   in.array(q.j, pairs);

@@ -7,50 +7,16 @@ namespace contactlab::dem {
 namespace {
 
 template <class T>
-void permute_one(std::vector<T>& v, std::span<const std::uint32_t> order, std::vector<T>& scratch) {
-  scratch.resize(v.size());
-  for (std::size_t a = 0; a < order.size(); ++a) scratch[a] = v[order[a]];
-  v.swap(scratch);
+void permute_one(std::vector<T>& v, std::span<const std::uint32_t> order) {
+  std::vector<T> permuted(v.size());
+  for (std::size_t a = 0; a < order.size(); ++a) permuted[a] = v[order[a]];
+  v.swap(permuted);
 }
 
 }  // namespace
 
 void Particles::resize(std::size_t n) {
-  id.resize(n);
-  material.resize(n);
-  contacts.resize(n);
-  for (auto* v : {&x,
-                  &y,
-                  &z,
-                  &vx,
-                  &vy,
-                  &vz,
-                  &wx,
-                  &wy,
-                  &wz,
-                  &pvx,
-                  &pvy,
-                  &pvz,
-                  &pwx,
-                  &pwy,
-                  &pwz,
-                  &fx,
-                  &fy,
-                  &fz,
-                  &tx,
-                  &ty,
-                  &tz,
-                  &radius,
-                  &mass,
-                  &inv_mass,
-                  &inv_inertia,
-                  &x0,
-                  &y0,
-                  &z0,
-                  &force_magnitude}) {
-    v->resize(n, 0.0);
-  }
-  for (auto& v : wall_spring) v.resize(n, 0.0);
+  for_each_array([n](auto& v) { v.resize(n); });  // new entries are zero
 }
 
 void Particles::set_wall_count(std::size_t walls) {
@@ -73,44 +39,7 @@ void Particles::add(std::uint32_t stable_id, std::uint16_t material_index, doubl
 }
 
 void Particles::permute(std::span<const std::uint32_t> order) {
-  std::vector<std::uint32_t> s32;
-  permute_one(id, order, s32);
-  std::vector<std::uint16_t> s16;
-  permute_one(material, order, s16);
-  permute_one(contacts, order, s16);
-  std::vector<double> sd;
-  for (auto* v : {&x,
-                  &y,
-                  &z,
-                  &vx,
-                  &vy,
-                  &vz,
-                  &wx,
-                  &wy,
-                  &wz,
-                  &pvx,
-                  &pvy,
-                  &pvz,
-                  &pwx,
-                  &pwy,
-                  &pwz,
-                  &fx,
-                  &fy,
-                  &fz,
-                  &tx,
-                  &ty,
-                  &tz,
-                  &radius,
-                  &mass,
-                  &inv_mass,
-                  &inv_inertia,
-                  &x0,
-                  &y0,
-                  &z0,
-                  &force_magnitude}) {
-    permute_one(*v, order, sd);
-  }
-  for (auto& v : wall_spring) permute_one(v, order, sd);
+  for_each_array([order](auto& v) { permute_one(v, order); });
 }
 
 }  // namespace contactlab::dem

@@ -36,6 +36,57 @@ struct Particles {
            double r, double density);
   // Every array permuted: new index a holds what index order[a] held.
   void permute(std::span<const std::uint32_t> order);
+
+  // Calls f on every per-particle array, in one fixed order (the checkpoint's): growth,
+  // permutation and checkpoints all go through this one list.
+  template <class F>
+  void for_each_array(F&& f) {
+    for_each_array_of(*this, f);
+  }
+  template <class F>
+  void for_each_array(F&& f) const {
+    for_each_array_of(*this, f);
+  }
+
+ private:
+  template <class Self, class F>
+  static void for_each_array_of(Self& p, F& f) {
+    f(p.id);
+    f(p.material);
+    f(p.contacts);
+    for (auto* v : {&p.x,
+                    &p.y,
+                    &p.z,
+                    &p.vx,
+                    &p.vy,
+                    &p.vz,
+                    &p.wx,
+                    &p.wy,
+                    &p.wz,
+                    &p.pvx,
+                    &p.pvy,
+                    &p.pvz,
+                    &p.pwx,
+                    &p.pwy,
+                    &p.pwz,
+                    &p.fx,
+                    &p.fy,
+                    &p.fz,
+                    &p.tx,
+                    &p.ty,
+                    &p.tz,
+                    &p.radius,
+                    &p.mass,
+                    &p.inv_mass,
+                    &p.inv_inertia,
+                    &p.x0,
+                    &p.y0,
+                    &p.z0,
+                    &p.force_magnitude}) {
+      f(*v);
+    }
+    for (auto& v : p.wall_spring) f(v);
+  }
 };
 
 }  // namespace contactlab::dem
