@@ -8,6 +8,8 @@
 
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <string>
 
 #include "contactlab/kernels/scene_generate.hpp"
@@ -34,6 +36,12 @@ inline CommandResult run_command(const std::string& command) {
 }
 
 inline std::string contactlab_exe() { return CONTACTLAB_EXE; }
+
+// A whole file's bytes ("" when it cannot be read).
+inline std::string slurp(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
 
 // Why programs of this build cannot run under valgrind, or "" when they can: valgrind and
 // AddressSanitizer both need to own the address space.

@@ -14,13 +14,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-std::string slurp(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
 // The folder itself (TempDir hands out files in it).
 fs::path root(const TempDir& dir) { return fs::path(dir.file("x")).parent_path(); }
 

@@ -12,30 +12,11 @@
 #include "contactlab/kernels/scene_generate.hpp"
 #include "contactlab/kernels/scene_io.hpp"
 #include "contactlab/tuner/result_schema.hpp"
+#include "mpi_cli_support.hpp"
 #include "program_test_support.hpp"
 
 namespace contactlab::test {
 namespace {
-
-// The MPI tests' environment is set on the command line: CTest's ENVIRONMENT property takes
-// one list, which gtest_discover_tests' PROPERTIES splits (as root Open MPI refuses to start
-// without the first two).
-std::string mpiexec(int ranks) {
-  return std::string(CONTACTLAB_MPI_ENV) + " " + CONTACTLAB_MPIEXEC + " -np " +
-         std::to_string(ranks) + " ";
-}
-
-std::string slurp(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-}
-
-int count_of(const std::string& text, const std::string& needle) {
-  int count = 0;
-  for (auto pos = text.find(needle); pos != std::string::npos; pos = text.find(needle, pos + 1))
-    ++count;
-  return count;
-}
 
 std::vector<std::string> entries(const std::string& dir) {
   std::vector<std::string> names;

@@ -16,32 +16,13 @@
 #include "contactlab/kernels/scene_io.hpp"
 #include "contactlab/tuner/result_schema.hpp"
 #include "contactlab/tuner/tune_report.hpp"
+#include "mpi_cli_support.hpp"
 #include "program_test_support.hpp"
 
 namespace contactlab::test {
 namespace {
 
 using nlohmann::json;
-
-// The MPI tests' environment is set on the command line: CTest's ENVIRONMENT property takes
-// one list, which gtest_discover_tests' PROPERTIES splits (as root Open MPI refuses to start
-// without the first two).
-std::string mpiexec(int ranks) {
-  return std::string(CONTACTLAB_MPI_ENV) + " " + CONTACTLAB_MPIEXEC + " -np " +
-         std::to_string(ranks) + " ";
-}
-
-std::string slurp(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-}
-
-int count_of(const std::string& text, const std::string& needle) {
-  int count = 0;
-  for (auto pos = text.find(needle); pos != std::string::npos; pos = text.find(needle, pos + 1))
-    ++count;
-  return count;
-}
 
 // The calibrated cache of the tune tests, without choices, as "CONTACTLAB_CACHE_DIR=... ".
 std::string fresh_cache(const TempDir& dir) {
