@@ -16,7 +16,6 @@ namespace contactlab::dem {
 using detail::kFailFraction;
 using detail::kKinStride;
 using detail::kWarnFraction;
-using detail::pair_rows;
 using detail::tangential;
 using detail::Tangential;
 
@@ -206,10 +205,9 @@ void Engine::compute_forces(bool final_kick) {
   const bool rolling = c.mu_roll > 0;
   std::uint64_t large = 0;  // overlaps above 1 %: the threads add exactly (integers)
   std::uint32_t bad_pair = UINT32_MAX, bad_wall_particle = UINT32_MAX;
-  row_sum_.resize(7 * n);
-  constexpr std::size_t kPrefetchAhead = 8;
   const double t0 = omp_get_wtime();
   double t_pairs = 0.0;
+  acc_.resize(detail::kAccStride * n);
   const std::size_t wall_count = settings_.walls.size();
   std::vector<Vec3> wall_point(wall_count), wall_velocity(wall_count);
   std::vector<std::uint8_t> wall_plane(wall_count), wall_active(wall_count);
@@ -221,42 +219,19 @@ void Engine::compute_forces(bool final_kick) {
     wall_plane[w] = wall.kind == WallKind::kPlane;
     wall_active[w] = wall.active(time_s_);
   }
-  // A particle's gather: its own row's sum, then the pairs where it is the j in pair order
-  // (fixed, so bit-identical for any thread count), walls, gravity, kick.
-  auto gather = [&](std::size_t a, std::uint64_t& large_here, std::uint32_t& bad_wall_here) {
-    const double* sum = &row_sum_[7 * a];
-    double fx = sum[0], fy = sum[1], fz = sum[2], tx = sum[3], ty = sum[4], tz = sum[5];
+  // A particle's finish: its pair sums (its own row, then its j sides in pair order: fixed,
+  // so bit-identical for any thread count), walls, gravity, kick.
+  double* acc = acc_.data();
+  auto finish = [&](std::size_t a, std::uint64_t& large_here, std::uint32_t& bad_wall_here) {
     // a's position, radius, mass and synchronised velocities from its kin_ block (one or two
     // cache lines, not nine arrays); the same values as the particle arrays.
     const double* ka = &kin_[kKinStride * a];
     const double xa = ka[0], ya = ka[1], za = ka[2], r = ka[3], mass = ka[7];
     const double pvxa = ka[4], pvya = ka[5], pvza = ka[6], pwxa = ka[8], pwya = ka[9],
                  pwza = ka[10];
-    unsigned touching = static_cast<unsigned>(sum[6]);
-    // The j sides in pair order, contiguous (each row wrote its j side into a's slots).
-    // The slots of the particles a few ahead are the next cache misses (written by rows up to
-    // a layer of cells back): start fetching them now.
-    if (a + kPrefetchAhead < n) {
-      const double* ahead = &q.out[6 * std::size_t{q.j_offsets[a + kPrefetchAhead]}];
-      __builtin_prefetch(ahead);
-      __builtin_prefetch(ahead + 8);
-      __builtin_prefetch(ahead + 16);
-    }
-    for (std::size_t e = q.j_offsets[a]; e < q.j_offsets[a + 1]; ++e) {
-      const double* out = &q.out[6 * e];
-      fx -= out[0];
-      fy -= out[1];
-      fz -= out[2];
-      tx -= r * out[3];
-      ty -= r * out[4];
-      tz -= r * out[5];
-      if (rolling) {
-        tx -= q.roll[3 * e];
-        ty -= q.roll[3 * e + 1];
-        tz -= q.roll[3 * e + 2];
-      }
-      touching += (out[0] != 0.0) | (out[1] != 0.0) | (out[2] != 0.0);  // a non-zero force
-    }
+    const double* sum = acc + detail::kAccStride * a;
+    double fx = sum[0], fy = sum[1], fz = sum[2], tx = sum[3], ty = sum[4], tz = sum[5];
+    double touching = sum[6];  // exact: a sum of ones
     for (std::size_t w = 0; w < wall_count; ++w) {
       double* hx = &p.wall_spring[3 * w][a];
       double* hy = &p.wall_spring[3 * w + 1][a];
@@ -339,42 +314,21 @@ void Engine::compute_forces(bool final_kick) {
       p.wz[a] += tz * p.inv_inertia[a] * half;
     }
   };
-  auto gather_loop = [&] {  // the gather alone (for the phase split)
-    std::uint64_t large_here = 0;
-    std::uint32_t bad_wall_here = UINT32_MAX;
-#pragma omp for schedule(static)
-    for (std::size_t a = 0; a < n; ++a) gather(a, large_here, bad_wall_here);
-    detail::combine_counts(large_here, bad_wall_here, large, bad_wall_particle);
-  };
   const double* kin = kin_.data();
+  auto pairs_done = [&] {
+    if (omp_get_thread_num() == 0) t_pairs = omp_get_wtime();
+  };
+  // The law's switches chosen at compile time.
+  auto passes = [&]<bool kRolling, bool kClamp>() {
 #pragma omp parallel num_threads(settings_.threads)
-  {
-    // The law's switches chosen at compile time.
-    if (settings_.fused_force_pass) {
-      if (rolling) {
-        c.clamp ? detail::fused_pass<true, true>(kin, n, q, c, dt, row_sum_, gather, large,
-                                                 bad_pair, bad_wall_particle)
-                : detail::fused_pass<true, false>(kin, n, q, c, dt, row_sum_, gather, large,
-                                                  bad_pair, bad_wall_particle);
-      } else {
-        c.clamp ? detail::fused_pass<false, true>(kin, n, q, c, dt, row_sum_, gather, large,
-                                                  bad_pair, bad_wall_particle)
-                : detail::fused_pass<false, false>(kin, n, q, c, dt, row_sum_, gather, large,
-                                                   bad_pair, bad_wall_particle);
-      }
-    } else {
-      if (rolling) {
-        c.clamp ? pair_rows<true, true>(kin, n, q, c, dt, row_sum_, large, bad_pair)
-                : pair_rows<true, false>(kin, n, q, c, dt, row_sum_, large, bad_pair);
-      } else {
-        c.clamp ? pair_rows<false, true>(kin, n, q, c, dt, row_sum_, large, bad_pair)
-                : pair_rows<false, false>(kin, n, q, c, dt, row_sum_, large, bad_pair);
-      }
-#pragma omp barrier
-#pragma omp single nowait
-      t_pairs = omp_get_wtime();
-      gather_loop();
-    }
+    detail::force_pass<kRolling, kClamp>(kin, n, q, c, dt, settings_.fused_force_pass, acc, finish,
+                                         pairs_done, large, bad_pair, bad_wall_particle);
+  };
+  if (rolling) {
+    c.clamp ? passes.template operator()<true, true>() : passes.template operator()<true, false>();
+  } else {
+    c.clamp ? passes.template operator()<false, true>()
+            : passes.template operator()<false, false>();
   }
   if (settings_.fused_force_pass) t_pairs = omp_get_wtime();  // all of it counts as pair forces
   const double t2 = omp_get_wtime();

@@ -1,5 +1,5 @@
 // The DEM force kernels shared by the engine's loops (private to src/): the tangential
-// history law and the pair loop over the rows of the half neighbour list.
+// history law and the pair pass over blocks of the half neighbour list.
 #pragma once
 
 #include <omp.h>
@@ -17,11 +17,17 @@ namespace contactlab::dem::detail {
 // Overlap thresholds, as fractions of the smaller radius: 1 % and 10 % of the diameter.
 constexpr double kWarnFraction = 0.02, kFailFraction = 0.2;
 
-// What the pair loop reads of a particle, side by side (one or two cache lines per partner
+// What the pair pass reads of a particle, side by side (one or two cache lines per particle
 // instead of one per array): x, y, z, r, pvx, pvy, pvz, m, pwx, pwy, pwz, unused.
 constexpr std::size_t kKinStride = 12;
-// How many pairs ahead the pair loop prefetches its partner's block.
-constexpr std::size_t kPartnerAhead = 6;
+// Per particle, kAccStride doubles, summed in pair order by the force pass: force [N],
+// torque [N m], touching contacts.
+constexpr std::size_t kAccStride = 8;
+// How many pairs ahead the pack loop prefetches its partner's data.
+constexpr std::size_t kPartnerAhead = 8;
+// Rows per block of the pair pass: enough pairs (about 4 a row) for full SIMD lanes, few enough
+// that a block's outputs are still in L1 when their particles are gathered.
+constexpr std::size_t kRowsPerBlock = 64;
 
 // The tangential part of the law for one contact (pair or wall), LAMMPS gran/hooke/history
 // with the stored spring projected first: xi <- xi - (xi.n) n; xi += v_t dt; F_t = -k_t xi -
@@ -40,108 +46,211 @@ inline Tangential tangential(double nx, double ny, double nz, double vtx, double
   double ftx = -kt * hx - ct * vtx, fty = -kt * hy - ct * vty, ftz = -kt * hz - ct * vtz;
   const double ft_sq = ftx * ftx + fty * fty + ftz * ftz;
   const double limit = mu * fn;
-  if (ft_sq > limit * limit) {
-    const double scale = ft_sq > 0 ? limit / std::sqrt(ft_sq) : 0.0;
-    ftx *= scale;
-    fty *= scale;
-    ftz *= scale;
-    const double inv_kt = kt > 0 ? 1.0 / kt : 0.0;
-    hx = -(ftx + ct * vtx) * inv_kt;
-    hy = -(fty + ct * vty) * inv_kt;
-    hz = -(ftz + ct * vtz) * inv_kt;
-  }
+  // Branch-free (the pair pass runs this on SIMD lanes): both quotients are computed and the
+  // unused one (possibly inf or NaN) is dropped by the selects; slipping implies ft_sq > 0.
+  const bool slip = ft_sq > limit * limit;
+  const double slip_scale = limit / std::sqrt(ft_sq), kt_inverse = 1.0 / kt;
+  const double scale = slip ? slip_scale : 1.0;
+  ftx *= scale;
+  fty *= scale;
+  ftz *= scale;
+  const double inv_kt = kt > 0 ? kt_inverse : 0.0;
+  hx = slip ? -(ftx + ct * vtx) * inv_kt : hx;
+  hy = slip ? -(fty + ct * vty) * inv_kt : hy;
+  hz = slip ? -(ftz + ct * vtz) * inv_kt : hz;
   return {ftx, fty, ftz};
 }
 
-// One row of the half list: the pairs of particle i in list order. i's sums stay in registers
-// and go to row_sum; each pair's j side goes to its slot, its spring is updated in place (both
-// written only by the thread of the row). Overlaps are counted into large / bad (exact).
-template <bool kRolling, bool kClamp>
-inline void row_forces(std::size_t i, const double* kin, PairList& q, const PairCoefficients& c,
-                       double dt, std::vector<double>& row_sum, std::uint64_t& large_here,
-                       std::uint32_t& bad_here) {
-  double fx = 0, fy = 0, fz = 0, tx = 0, ty = 0, tz = 0;
-  unsigned touching = 0;
-  const double* ki = &kin[kKinStride * i];
-  const double xi = ki[0], yi = ki[1], zi = ki[2], ri = ki[3], mi = ki[7];
-  const double pvxi = ki[4], pvyi = ki[5], pvzi = ki[6];
-  const double pwxi = ki[8], pwyi = ki[9], pwzi = ki[10];
-  const std::size_t pairs = q.j.size();
-  for (std::uint32_t k = q.rows[i]; k < q.rows[i + 1]; ++k) {
-    // Partners lie up to two layers of cells back (mostly L2, out of reach of the hardware
-    // prefetcher): fetch the block of the partner a few pairs ahead.
-    if (k + kPartnerAhead < pairs) __builtin_prefetch(&kin[kKinStride * q.j[k + kPartnerAhead]]);
-    const double* kj = &kin[kKinStride * q.j[k]];
-    const auto& sh = q.shift[q.image[k]];
-    const double dx = xi - kj[0] - sh[0], dy = yi - kj[1] - sh[1], dz = zi - kj[2] - sh[2];
-    const double rj = kj[3], rr = ri + rj;
-    const double rsq = dx * dx + dy * dy + dz * dz;
-    const std::size_t slot = q.j_slot[k];
-    double* out = &q.out[6 * slot];
-    if (rsq >= rr * rr) {
-      q.hx[k] = q.hy[k] = q.hz[k] = 0.0;
-      out[0] = out[1] = out[2] = out[3] = out[4] = out[5] = 0.0;
-      if constexpr (kRolling) q.roll[3 * slot] = q.roll[3 * slot + 1] = q.roll[3 * slot + 2] = 0.0;
-      continue;
-    }
-    const double dist = std::sqrt(rsq), inv = 1.0 / dist;
-    const double nx = dx * inv, ny = dy * inv, nz = dz * inv;
-    const double delta = rr - dist;
-    const double r_min = std::min(ri, rj);
-    large_here += delta > kWarnFraction * r_min;
-    if (delta > kFailFraction * r_min) bad_here = std::min(bad_here, k);
-    const double mj = kj[7];
-    const double m_star = mi * mj / (mi + mj);
-    // Relative velocity of the contact point: v_i - v_j - (r_i w_i + r_j w_j) x n.
-    const double sx = ri * pwxi + rj * kj[8], sy = ri * pwyi + rj * kj[9],
-                 sz = ri * pwzi + rj * kj[10];
-    const double vx = pvxi - kj[4] - (sy * nz - sz * ny);
-    const double vy = pvyi - kj[5] - (sz * nx - sx * nz);
-    const double vz = pvzi - kj[6] - (sx * ny - sy * nx);
-    const double vn = vx * nx + vy * ny + vz * nz;
-    const double kn = c.k_abs + c.k_per_mass * m_star, cn = c.c_per_mass * m_star;
-    double fn = kn * delta - cn * vn;
-    if constexpr (kClamp) fn = std::max(fn, 0.0);
-    const Tangential ft =
-        tangential(nx, ny, nz, vx - vn * nx, vy - vn * ny, vz - vn * nz, fn, c.kt_ratio * kn,
-                   c.ct_ratio * cn, c.mu, dt, q.hx[k], q.hy[k], q.hz[k]);
-    const double fpx = fn * nx + ft.ftx, fpy = fn * ny + ft.fty, fpz = fn * nz + ft.ftz;
-    const double cx = ny * ft.ftz - nz * ft.fty, cy = nz * ft.ftx - nx * ft.ftz,
-                 cz = nx * ft.fty - ny * ft.ftx;
-    out[0] = fpx;
-    out[1] = fpy;
-    out[2] = fpz;
-    out[3] = cx;
-    out[4] = cy;
-    out[5] = cz;
-    fx += fpx;
-    fy += fpy;
-    fz += fpz;
-    tx -= ri * cx;
-    ty -= ri * cy;
-    tz -= ri * cz;
-    touching += (fpx != 0.0) | (fpy != 0.0) | (fpz != 0.0);
-    if constexpr (kRolling) {
-      // Constant rolling-resistance torque against the relative rotation (model A).
-      const double ox = pwxi - kj[8], oy = pwyi - kj[9], oz = pwzi - kj[10];
-      const double om = std::sqrt(ox * ox + oy * oy + oz * oz);
-      const double s = om > 0 ? -c.mu_roll * fn * (ri * rj / rr) / om : 0.0;
-      q.roll[3 * slot] = s * ox;
-      q.roll[3 * slot + 1] = s * oy;
-      q.roll[3 * slot + 2] = s * oz;
-      tx += s * ox;
-      ty += s * oy;
-      tz += s * oz;
+// One block of pairs, field by field (contiguous, so the law runs on SIMD lanes with plain
+// vector loads and stores, no gathers): the inputs the pack loop derives from the two
+// particles' kin blocks, and the outputs the law writes.
+struct PairBlock {
+  enum Input {
+    kDx,
+    kDy,
+    kDz,
+    kRr,
+    kRmin,
+    kMi,
+    kMj,
+    kDvx,
+    kDvy,
+    kDvz,
+    kSx,
+    kSy,
+    kSz,
+    kDwx,
+    kDwy,
+    kDwz,
+    kRprod,
+    kInputs
+  };
+  // Force on i [N], n x F_t [N], 1 if touching with a force, rolling torque on i [N m].
+  enum Output { kFx, kFy, kFz, kCx, kCy, kCz, kTouch, kRollX, kRollY, kRollZ, kOutputs };
+  std::size_t capacity = 0;
+  std::vector<double> data;
+
+  void reserve(std::size_t pairs) {
+    if (pairs <= capacity) return;
+    capacity = pairs;
+    data.resize(std::size_t{kInputs + 0u + kOutputs} * capacity);
+  }
+  double* in(Input f) { return data.data() + f * capacity; }
+  double* out(Output f) { return data.data() + (std::size_t{kInputs} + f) * capacity; }
+};
+
+// Pack: the rows [first, last) (pairs [rows[first], rows[last])), i's values in registers,
+// j's from its kin block, into the block's inputs (the same operations, in the same order, as
+// the law on whole particles, so nothing is rounded differently).
+template <bool kRolling>
+inline void pack_rows(const double* kin, const PairList& q, std::size_t first, std::size_t last,
+                      PairBlock& blk, double* acc) {
+  const std::size_t k0 = q.rows[first];
+  double* dx = blk.in(PairBlock::kDx);
+  double* dy = blk.in(PairBlock::kDy);
+  double* dz = blk.in(PairBlock::kDz);
+  double* rr = blk.in(PairBlock::kRr);
+  double* rmin = blk.in(PairBlock::kRmin);
+  double* mi = blk.in(PairBlock::kMi);
+  double* mj = blk.in(PairBlock::kMj);
+  double* dvx = blk.in(PairBlock::kDvx);
+  double* dvy = blk.in(PairBlock::kDvy);
+  double* dvz = blk.in(PairBlock::kDvz);
+  double* sx = blk.in(PairBlock::kSx);
+  double* sy = blk.in(PairBlock::kSy);
+  double* sz = blk.in(PairBlock::kSz);
+  for (std::size_t i = first; i < last; ++i) {
+    const double* ki = kin + kKinStride * i;
+    const double xi = ki[0], yi = ki[1], zi = ki[2], ri = ki[3], vxi = ki[4], vyi = ki[5],
+                 vzi = ki[6], m = ki[7], wxi = ki[8], wyi = ki[9], wzi = ki[10];
+    for (std::size_t k = q.rows[i]; k < q.rows[i + 1]; ++k) {
+      // Partners lie up to max_span particles back (L2 or beyond, out of reach of the hardware
+      // prefetcher): fetch the kin block and the sums of the partner a few pairs ahead.
+      if (k + kPartnerAhead < q.j.size()) {
+        const std::size_t ahead = q.j[k + kPartnerAhead];
+        __builtin_prefetch(kin + kKinStride * ahead);
+        __builtin_prefetch(kin + kKinStride * ahead + kKinStride - 1);
+        __builtin_prefetch(acc + kAccStride * ahead, 1);
+      }
+      const double* kj = kin + kKinStride * q.j[k];
+      const auto& sh = q.shift[q.image[k]];
+      const std::size_t b = k - k0;
+      const double rj = kj[3];
+      dx[b] = xi - kj[0] - sh[0];
+      dy[b] = yi - kj[1] - sh[1];
+      dz[b] = zi - kj[2] - sh[2];
+      rr[b] = ri + rj;
+      rmin[b] = rj < ri ? rj : ri;
+      mi[b] = m;
+      mj[b] = kj[7];
+      dvx[b] = vxi - kj[4];
+      dvy[b] = vyi - kj[5];
+      dvz[b] = vzi - kj[6];
+      sx[b] = ri * wxi + rj * kj[8];
+      sy[b] = ri * wyi + rj * kj[9];
+      sz[b] = ri * wzi + rj * kj[10];
+      if constexpr (kRolling) {
+        blk.in(PairBlock::kDwx)[b] = wxi - kj[8];
+        blk.in(PairBlock::kDwy)[b] = wyi - kj[9];
+        blk.in(PairBlock::kDwz)[b] = wzi - kj[10];
+        blk.in(PairBlock::kRprod)[b] = ri * rj;
+      }
     }
   }
-  double* sum = &row_sum[7 * i];
-  sum[0] = fx;
-  sum[1] = fy;
-  sum[2] = fz;
-  sum[3] = tx;
-  sum[4] = ty;
-  sum[5] = tz;
-  sum[6] = touching;
+}
+
+// The law on the packed pairs [k0, k1), each independent of the others, on SIMD lanes (masks
+// instead of branches): outputs zero while apart, springs updated in place. With
+// -ffp-contract=off a lane computes exactly what scalar code would, so where a block boundary
+// falls (it moves with the thread count) changes no bit. Overlaps above 1 % are counted into
+// `large`, the first above 10 % goes to `bad` (both exact).
+template <bool kRolling, bool kClamp>
+inline void pair_law(PairList& q, const PairCoefficients& c, double dt, std::size_t k0,
+                     std::size_t k1, PairBlock& blk, std::uint64_t& large, std::uint32_t& bad) {
+  const double* __restrict dx = blk.in(PairBlock::kDx);
+  const double* __restrict dy = blk.in(PairBlock::kDy);
+  const double* __restrict dz = blk.in(PairBlock::kDz);
+  const double* __restrict rr_in = blk.in(PairBlock::kRr);
+  const double* __restrict rmin = blk.in(PairBlock::kRmin);
+  const double* __restrict mi = blk.in(PairBlock::kMi);
+  const double* __restrict mj = blk.in(PairBlock::kMj);
+  const double* __restrict dvx = blk.in(PairBlock::kDvx);
+  const double* __restrict dvy = blk.in(PairBlock::kDvy);
+  const double* __restrict dvz = blk.in(PairBlock::kDvz);
+  const double* __restrict sx_in = blk.in(PairBlock::kSx);
+  const double* __restrict sy_in = blk.in(PairBlock::kSy);
+  const double* __restrict sz_in = blk.in(PairBlock::kSz);
+  const double* __restrict dwx = blk.in(PairBlock::kDwx);
+  const double* __restrict dwy = blk.in(PairBlock::kDwy);
+  const double* __restrict dwz = blk.in(PairBlock::kDwz);
+  const double* __restrict rprod = blk.in(PairBlock::kRprod);
+  double* __restrict out_fx = blk.out(PairBlock::kFx);
+  double* __restrict out_fy = blk.out(PairBlock::kFy);
+  double* __restrict out_fz = blk.out(PairBlock::kFz);
+  double* __restrict out_cx = blk.out(PairBlock::kCx);
+  double* __restrict out_cy = blk.out(PairBlock::kCy);
+  double* __restrict out_cz = blk.out(PairBlock::kCz);
+  double* __restrict out_touch = blk.out(PairBlock::kTouch);
+  double* __restrict roll_x = blk.out(PairBlock::kRollX);
+  double* __restrict roll_y = blk.out(PairBlock::kRollY);
+  double* __restrict roll_z = blk.out(PairBlock::kRollZ);
+  double* __restrict hx = q.hx.data() + k0;
+  double* __restrict hy = q.hy.data() + k0;
+  double* __restrict hz = q.hz.data() + k0;
+  const double k_abs = c.k_abs, k_per_mass = c.k_per_mass, c_per_mass = c.c_per_mass;
+  const double kt_ratio = c.kt_ratio, ct_ratio = c.ct_ratio, mu = c.mu, mu_roll = c.mu_roll;
+  const auto count = static_cast<std::uint32_t>(k1 - k0), first = static_cast<std::uint32_t>(k0);
+  std::uint64_t large_here = 0;
+  std::uint32_t bad_here = UINT32_MAX;
+#pragma omp simd reduction(+ : large_here) reduction(min : bad_here)
+  for (std::uint32_t b = 0; b < count; ++b) {
+    const double rr = rr_in[b];
+    const double rsq = dx[b] * dx[b] + dy[b] * dy[b] + dz[b] * dz[b];
+    const bool touch = rsq < rr * rr;
+    const double dist = std::sqrt(rsq), inv = 1.0 / dist;
+    const double nx = dx[b] * inv, ny = dy[b] * inv, nz = dz[b] * inv;
+    const double delta = rr - dist;
+    large_here += touch & (delta > kWarnFraction * rmin[b]);
+    const bool failing = touch & (delta > kFailFraction * rmin[b]);
+    bad_here = failing && first + b < bad_here ? first + b : bad_here;
+    const double m_star = mi[b] * mj[b] / (mi[b] + mj[b]);
+    // Relative velocity of the contact point: v_i - v_j - (r_i w_i + r_j w_j) x n.
+    const double sx = sx_in[b], sy = sy_in[b], sz = sz_in[b];
+    const double vx = dvx[b] - (sy * nz - sz * ny);
+    const double vy = dvy[b] - (sz * nx - sx * nz);
+    const double vz = dvz[b] - (sx * ny - sy * nx);
+    const double vn = vx * nx + vy * ny + vz * nz;
+    const double kn = k_abs + k_per_mass * m_star, cn = c_per_mass * m_star;
+    double fn = kn * delta - cn * vn;
+    if constexpr (kClamp) fn = fn < 0.0 ? 0.0 : fn;  // std::max(fn, 0.0)
+    double sxk = hx[b], syk = hy[b], szk = hz[b];
+    const Tangential ft = tangential(nx, ny, nz, vx - vn * nx, vy - vn * ny, vz - vn * nz, fn,
+                                     kt_ratio * kn, ct_ratio * cn, mu, dt, sxk, syk, szk);
+    hx[b] = touch ? sxk : 0.0;
+    hy[b] = touch ? syk : 0.0;
+    hz[b] = touch ? szk : 0.0;
+    const double fpx = fn * nx + ft.ftx, fpy = fn * ny + ft.fty, fpz = fn * nz + ft.ftz;
+    out_fx[b] = touch ? fpx : 0.0;
+    out_fy[b] = touch ? fpy : 0.0;
+    out_fz[b] = touch ? fpz : 0.0;
+    out_cx[b] = touch ? ny * ft.ftz - nz * ft.fty : 0.0;
+    out_cy[b] = touch ? nz * ft.ftx - nx * ft.ftz : 0.0;
+    out_cz[b] = touch ? nx * ft.fty - ny * ft.ftx : 0.0;
+    // A contact with a zero force (e.g. the clamp) does not count as touching.
+    out_touch[b] = touch & ((fpx != 0.0) | (fpy != 0.0) | (fpz != 0.0)) ? 1.0 : 0.0;
+    if constexpr (kRolling) {
+      // Constant rolling-resistance torque against the relative rotation (model A).
+      const double ox = dwx[b], oy = dwy[b], oz = dwz[b];
+      const double om = std::sqrt(ox * ox + oy * oy + oz * oz);
+      const double s_any = -mu_roll * fn * (rprod[b] / rr) / om;  // dropped where om = 0
+      const double s = om > 0 ? s_any : 0.0;
+      roll_x[b] = touch ? s * ox : 0.0;
+      roll_y[b] = touch ? s * oy : 0.0;
+      roll_z[b] = touch ? s * oz : 0.0;
+    }
+  }
+  large += large_here;
+  bad = std::min(bad, bad_here);
 }
 
 // Combines a thread's overlap counts into the shared ones (integers: exact in any order).
@@ -157,42 +266,123 @@ inline void combine_counts(std::uint64_t here, std::uint32_t bad_here, std::uint
   }
 }
 
-// The pair loop alone (for the phase split): rows shared out by `omp for` (orphaned: called
-// inside the parallel region).
-template <bool kRolling, bool kClamp>
-void pair_rows(const double* kin, std::size_t n, PairList& q, const PairCoefficients& c, double dt,
-               std::vector<double>& row_sum, std::uint64_t& large, std::uint32_t& bad_pair) {
-  std::uint64_t large_here = 0;
-  std::uint32_t bad_here = UINT32_MAX;
-#pragma omp for schedule(static)
-  for (std::size_t i = 0; i < n; ++i) {
-    row_forces<kRolling, kClamp>(i, kin, q, c, dt, row_sum, large_here, bad_here);
+// Adds the block's pair outputs to the particles' sums in pair order: the i side to acc[i],
+// the j side to acc[j] when this thread owns j (j >= own_begin); otherwise the outputs are
+// kept in q.out / q.roll_* for j's owner, which adds them after the barrier (they come from
+// later rows, so pair order still holds). Particle a's sum is therefore its own row, then its
+// j sides in pair order, whatever the thread count.
+template <bool kRolling>
+inline void accumulate_block(const double* kin, PairList& q, std::size_t k0, std::size_t k1,
+                             PairBlock& blk, std::size_t own_begin, double* acc) {
+  constexpr std::size_t kOut = PairList::kOutStride;
+  const double* o[PairBlock::kOutputs];
+  for (int f = 0; f < PairBlock::kOutputs; ++f) o[f] = blk.out(static_cast<PairBlock::Output>(f));
+  for (std::size_t k = k0; k < k1; ++k) {
+    const std::size_t b = k - k0;
+    const std::uint32_t i = q.i[k], j = q.j[k];
+    const double ri = kin[kKinStride * i + 3];
+    double* ai = acc + kAccStride * i;
+    ai[0] += o[PairBlock::kFx][b];
+    ai[1] += o[PairBlock::kFy][b];
+    ai[2] += o[PairBlock::kFz][b];
+    ai[3] -= ri * o[PairBlock::kCx][b];
+    ai[4] -= ri * o[PairBlock::kCy][b];
+    ai[5] -= ri * o[PairBlock::kCz][b];
+    ai[6] += o[PairBlock::kTouch][b];
+    if constexpr (kRolling) {
+      ai[3] += o[PairBlock::kRollX][b];
+      ai[4] += o[PairBlock::kRollY][b];
+      ai[5] += o[PairBlock::kRollZ][b];
+    }
+    if (j < own_begin) {  // another thread's particle: left for its owner
+      for (int f = 0; f <= PairBlock::kTouch; ++f) q.out[kOut * k + f] = o[f][b];
+      if constexpr (kRolling) {
+        q.roll_x[k] = o[PairBlock::kRollX][b];
+        q.roll_y[k] = o[PairBlock::kRollY][b];
+        q.roll_z[k] = o[PairBlock::kRollZ][b];
+      }
+      continue;
+    }
+    const double rj = kin[kKinStride * j + 3];
+    double* aj = acc + kAccStride * j;
+    aj[0] -= o[PairBlock::kFx][b];
+    aj[1] -= o[PairBlock::kFy][b];
+    aj[2] -= o[PairBlock::kFz][b];
+    aj[3] -= rj * o[PairBlock::kCx][b];
+    aj[4] -= rj * o[PairBlock::kCy][b];
+    aj[5] -= rj * o[PairBlock::kCz][b];
+    aj[6] += o[PairBlock::kTouch][b];
+    if constexpr (kRolling) {
+      aj[3] -= o[PairBlock::kRollX][b];
+      aj[4] -= o[PairBlock::kRollY][b];
+      aj[5] -= o[PairBlock::kRollZ][b];
+    }
   }
-  combine_counts(large_here, bad_here, large, bad_pair);
 }
 
-// The fused pass: each thread takes a contiguous block of rows [b, e) and gathers particle a
-// as soon as the rows holding its j sides, (a, a + max_span], are done (they are still in
-// cache); the last max_span particles of the block wait for the next block's rows, after a
-// barrier. gather(a, large, bad_wall) does a particle's gather, walls, gravity and kick; its
-// sums do not depend on when it runs, so the result is the same for any thread count.
-template <bool kRolling, bool kClamp, class Gather>
-void fused_pass(const double* kin, std::size_t n, PairList& q, const PairCoefficients& c, double dt,
-                std::vector<double>& row_sum, Gather& gather, std::uint64_t& large,
-                std::uint32_t& bad_pair, std::uint32_t& bad_wall) {
+// Adds to particle a's sum the j sides that later threads left in q.out (pairs from rows at
+// or after own_end), in pair order.
+template <bool kRolling>
+inline void accumulate_deferred(const double* kin, const PairList& q, std::size_t a,
+                                std::size_t own_end, double* acc) {
+  constexpr std::size_t kOut = PairList::kOutStride;
+  const double r = kin[kKinStride * a + 3];
+  double* aa = acc + kAccStride * a;
+  for (std::size_t e = q.j_offsets[a]; e < q.j_offsets[a + 1]; ++e) {
+    const std::uint32_t k = q.j_pairs[e];
+    if (q.i[k] < own_end) continue;  // added directly
+    const double* o = &q.out[kOut * k];
+    aa[0] -= o[0];
+    aa[1] -= o[1];
+    aa[2] -= o[2];
+    aa[3] -= r * o[3];
+    aa[4] -= r * o[4];
+    aa[5] -= r * o[5];
+    aa[6] += o[6];
+    if constexpr (kRolling) {
+      aa[3] -= q.roll_x[k];
+      aa[4] -= q.roll_y[k];
+      aa[5] -= q.roll_z[k];
+    }
+  }
+}
+
+// The force pass: each thread takes a contiguous range of rows [b, e), computes them a block
+// at a time (pack_rows, pair_law on SIMD lanes, accumulate_block) and
+// finishes particle a (finish(a, large, bad_wall): walls, gravity, kick, from acc[a]) as soon
+// as the rows holding its j sides, (a, a + lag], are done; lag = max_span finishes particles
+// while their sums are still in cache (fused), lag = n finishes every particle after the
+// barrier (split: the pair phase timed alone; `pairs_done` is called once then). The last
+// max_span particles of a range wait for the next range's rows, after a barrier. A particle's
+// sums do not depend on when it is finished, so the result is the same for any thread count.
+template <bool kRolling, bool kClamp, class Finish, class PairsDone>
+void force_pass(const double* kin, std::size_t n, PairList& q, const PairCoefficients& c, double dt,
+                bool fused, double* acc, Finish& finish, PairsDone& pairs_done,
+                std::uint64_t& large, std::uint32_t& bad_pair, std::uint32_t& bad_wall) {
   const auto t = static_cast<std::size_t>(omp_get_thread_num());
   const auto threads = static_cast<std::size_t>(omp_get_num_threads());
-  const std::size_t b = n * t / threads, e = n * (t + 1) / threads, lag = q.max_span;
+  const std::size_t b = n * t / threads, e = n * (t + 1) / threads;
+  const std::size_t lag = fused ? q.max_span : n;
   std::uint64_t large_here = 0;
   std::uint32_t bad_here = UINT32_MAX, bad_wall_here = UINT32_MAX;
-  for (std::size_t i = b; i < e; ++i) {
-    row_forces<kRolling, kClamp>(i, kin, q, c, dt, row_sum, large_here, bad_here);
-    if (i >= b + lag) gather(i - lag, large_here, bad_wall_here);
+  PairBlock blk;
+  std::size_t next = b;  // the next particle to finish
+  for (std::size_t first = b; first < e; first += kRowsPerBlock) {
+    const std::size_t last = std::min(e, first + kRowsPerBlock);
+    const std::size_t k0 = q.rows[first], k1 = q.rows[last];
+    blk.reserve(k1 - k0);
+    std::fill(acc + kAccStride * first, acc + kAccStride * last, 0.0);
+    pack_rows<kRolling>(kin, q, first, last, blk, acc);
+    pair_law<kRolling, kClamp>(q, c, dt, k0, k1, blk, large_here, bad_here);
+    accumulate_block<kRolling>(kin, q, k0, k1, blk, b, acc);
+    for (; next + lag < last; ++next) finish(next, large_here, bad_wall_here);
   }
 #pragma omp barrier
-  for (std::size_t a = e > b + lag ? e - lag : b; a < e; ++a) {
-    gather(a, large_here, bad_wall_here);
+  pairs_done();
+  for (std::size_t a = std::max(next, e > q.max_span ? e - q.max_span : 0); a < e; ++a) {
+    accumulate_deferred<kRolling>(kin, q, a, e, acc);
   }
+  for (; next < e; ++next) finish(next, large_here, bad_wall_here);
   combine_counts(large_here, bad_here, large, bad_pair);
   combine_counts(0, bad_wall_here, large, bad_wall);
 }

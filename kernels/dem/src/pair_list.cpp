@@ -16,8 +16,8 @@ void PairList::resize(std::size_t n, bool rolling) {
   j.resize(n);
   image.resize(n);
   for (auto* v : {&hx, &hy, &hz}) v->resize(n);
-  out.resize(6 * n);
-  roll.resize(rolling ? 3 * n : 0);
+  out.resize(kOutStride * n);
+  for (auto* v : {&roll_x, &roll_y, &roll_z}) v->resize(rolling ? n : 0);
 }
 
 void PairList::build_csr(std::size_t particles) {
@@ -62,11 +62,7 @@ void PairList::build_csr(std::size_t particles) {
   for (std::size_t p = 0; p < particles; ++p) j_offsets[p + 1] += j_offsets[p];
   j_pairs.resize(j_offsets[particles]);
   std::vector<std::uint32_t> next(j_offsets.begin(), j_offsets.end() - 1);
-  j_slot.resize(size());
-  for (std::size_t k = 0; k < size(); ++k) {
-    j_slot[k] = next[j[k]];
-    j_pairs[next[j[k]]++] = static_cast<std::uint32_t>(k);
-  }
+  for (std::size_t k = 0; k < size(); ++k) j_pairs[next[j[k]]++] = static_cast<std::uint32_t>(k);
 }
 
 void radix_sort(std::vector<std::uint64_t>& keys, std::vector<std::uint32_t>& payload, int bits,

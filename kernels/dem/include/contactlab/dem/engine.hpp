@@ -121,8 +121,8 @@ class Engine {
   double base_time_s_ = 0.0;  // time and step of the last restore: t = base + (step - base) dt
   std::uint64_t base_step_ = 0;
   PhaseTimes phases_;
-  std::vector<double> kin_;      // what the pair loop reads per particle, side by side
-  std::vector<double> row_sum_;  // per particle: its own row's force, torque, touching count
+  std::vector<double> kin_;  // what the pair loop reads per particle, side by side
+  std::vector<double> acc_;  // per particle: the force pass's pair sums (detail::kAccStride)
 };
 
 }  // namespace contactlab::dem

@@ -28,18 +28,18 @@ struct PairList {
   std::vector<std::uint32_t> i, j;  // particle indices (current order)
   std::vector<std::uint8_t> image;  // periodic image code of j
   std::vector<double> hx, hy, hz;   // tangential spring xi [m], oriented as seen from i
-  // The per-pair buffer for the j side, written by the force loop (each slot by the thread of
-  // the pair's row), 6 doubles a pair side by side: force on i [N] (j gets minus it) and
-  // n x F_t [N] (j's torque is -r_j times it). `roll`: rolling torque on i [N m] (j gets minus
-  // it), 3 a pair, only with rolling resistance. Both are indexed by the pair's j slot (see
-  // j_slot), so a particle's gather is a contiguous run: the scattered side is the store.
-  std::vector<double> out, roll;
+  // Per pair, in pair order, written by the force pass (zero while apart), kOutStride doubles
+  // a pair, one cache line: the force on i [N] (j gets minus it), n x F_t [N] (i's torque is
+  // -r_i times it, j's -r_j times it), 1 if touching (else 0), unused. With rolling resistance,
+  // roll_*: the rolling torque on i [N m] (j gets minus it). A particle's gather reads its own
+  // row's run and its j sides through j_pairs, in a fixed order.
+  static constexpr std::size_t kOutStride = 8;
+  std::vector<double> out, roll_x, roll_y, roll_z;
   // Pairs run from the later particle to the earlier (j < i) and are grouped by i, ascending:
   // particle a's own pairs are [rows[a], rows[a + 1]). The pairs where a is the j:
   // j_pairs[j_offsets[a] .. j_offsets[a + 1]), in pair order; they lie in the rows
   // (a, a + max_span].
-  // j_slot[k]: pair k's position in j_pairs (where its j side is written in out and roll).
-  std::vector<std::uint32_t> rows, j_offsets, j_pairs, j_slot;
+  std::vector<std::uint32_t> rows, j_offsets, j_pairs;
   std::size_t max_span = 0;
   std::array<std::array<double, 3>, 27> shift{};  // image code -> shift [m]
 
