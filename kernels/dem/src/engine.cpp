@@ -208,6 +208,9 @@ void Engine::compute_forces(bool final_kick) {
   const double t0 = omp_get_wtime();
   double t_pairs = 0.0;
   acc_.resize(detail::kAccStride * n);
+  if (block_scratch_.size() < static_cast<std::size_t>(settings_.threads)) {
+    block_scratch_.resize(static_cast<std::size_t>(settings_.threads));
+  }
   const std::size_t wall_count = settings_.walls.size();
   std::vector<Vec3> wall_point(wall_count), wall_velocity(wall_count);
   std::vector<std::uint8_t> wall_plane(wall_count), wall_active(wall_count);
@@ -321,8 +324,9 @@ void Engine::compute_forces(bool final_kick) {
   // The law's switches chosen at compile time.
   auto passes = [&]<bool kRolling, bool kClamp>() {
 #pragma omp parallel num_threads(settings_.threads)
-    detail::force_pass<kRolling, kClamp>(kin, n, q, c, dt, settings_.fused_force_pass, acc, finish,
-                                         pairs_done, large, bad_pair, bad_wall_particle);
+    detail::force_pass<kRolling, kClamp>(kin, n, q, c, dt, settings_.fused_force_pass, acc,
+                                         block_scratch_[omp_get_thread_num()], finish, pairs_done,
+                                         large, bad_pair, bad_wall_particle);
   };
   if (rolling) {
     c.clamp ? passes.template operator()<true, true>() : passes.template operator()<true, false>();

@@ -85,15 +85,34 @@ struct PairBlock {
     kRprod,
     kInputs
   };
-  // Force on i [N], n x F_t [N], 1 if touching with a force, rolling torque on i [N m].
-  enum Output { kFx, kFy, kFz, kCx, kCy, kCz, kTouch, kRollX, kRollY, kRollZ, kOutputs };
+  // Force on i [N], n x F_t [N], 1 if touching with a force, rolling torque on i [N m], 1 if
+  // the overlap is above 1 % / 10 % (flags, not SIMD reductions: those cost a memset a block).
+  enum Output {
+    kFx,
+    kFy,
+    kFz,
+    kCx,
+    kCy,
+    kCz,
+    kTouch,
+    kRollX,
+    kRollY,
+    kRollZ,
+    kLarge,
+    kFailing,
+    kOutputs
+  };
+  // The storage is the calling thread's, kept by the engine from step to step (a fresh
+  // buffer each step costs page faults and zeroing).
+  explicit PairBlock(std::vector<double>& storage) : data(storage) {}
   std::size_t capacity = 0;
-  std::vector<double> data;
+  std::vector<double>& data;
 
+  static constexpr std::size_t kFields = std::size_t{kInputs} + kOutputs;
+  // Room for `pairs` pairs (the storage only grows; the field stride is its whole length).
   void reserve(std::size_t pairs) {
-    if (pairs <= capacity) return;
-    capacity = pairs;
-    data.resize(std::size_t{kInputs + 0u + kOutputs} * capacity);
+    capacity = std::max(pairs, data.size() / kFields);
+    data.resize(kFields * capacity);
   }
   double* in(Input f) { return data.data() + f * capacity; }
   double* out(Output f) { return data.data() + (std::size_t{kInputs} + f) * capacity; }
@@ -166,7 +185,7 @@ inline void pack_rows(const double* kin, const PairList& q, std::size_t first, s
 // `large`, the first above 10 % goes to `bad` (both exact).
 template <bool kRolling, bool kClamp>
 inline void pair_law(PairList& q, const PairCoefficients& c, double dt, std::size_t k0,
-                     std::size_t k1, PairBlock& blk, std::uint64_t& large, std::uint32_t& bad) {
+                     std::size_t k1, PairBlock& blk) {
   const double* __restrict dx = blk.in(PairBlock::kDx);
   const double* __restrict dy = blk.in(PairBlock::kDy);
   const double* __restrict dz = blk.in(PairBlock::kDz);
@@ -199,10 +218,10 @@ inline void pair_law(PairList& q, const PairCoefficients& c, double dt, std::siz
   double* __restrict hz = q.hz.data() + k0;
   const double k_abs = c.k_abs, k_per_mass = c.k_per_mass, c_per_mass = c.c_per_mass;
   const double kt_ratio = c.kt_ratio, ct_ratio = c.ct_ratio, mu = c.mu, mu_roll = c.mu_roll;
-  const auto count = static_cast<std::uint32_t>(k1 - k0), first = static_cast<std::uint32_t>(k0);
-  std::uint64_t large_here = 0;
-  std::uint32_t bad_here = UINT32_MAX;
-#pragma omp simd reduction(+ : large_here) reduction(min : bad_here)
+  double* __restrict out_large = blk.out(PairBlock::kLarge);
+  double* __restrict out_failing = blk.out(PairBlock::kFailing);
+  const auto count = static_cast<std::uint32_t>(k1 - k0);
+#pragma omp simd
   for (std::uint32_t b = 0; b < count; ++b) {
     const double rr = rr_in[b];
     const double rsq = dx[b] * dx[b] + dy[b] * dy[b] + dz[b] * dz[b];
@@ -210,9 +229,8 @@ inline void pair_law(PairList& q, const PairCoefficients& c, double dt, std::siz
     const double dist = std::sqrt(rsq), inv = 1.0 / dist;
     const double nx = dx[b] * inv, ny = dy[b] * inv, nz = dz[b] * inv;
     const double delta = rr - dist;
-    large_here += touch & (delta > kWarnFraction * rmin[b]);
-    const bool failing = touch & (delta > kFailFraction * rmin[b]);
-    bad_here = failing && first + b < bad_here ? first + b : bad_here;
+    out_large[b] = touch & (delta > kWarnFraction * rmin[b]) ? 1.0 : 0.0;
+    out_failing[b] = touch & (delta > kFailFraction * rmin[b]) ? 1.0 : 0.0;
     const double m_star = mi[b] * mj[b] / (mi[b] + mj[b]);
     // Relative velocity of the contact point: v_i - v_j - (r_i w_i + r_j w_j) x n.
     const double sx = sx_in[b], sy = sy_in[b], sz = sz_in[b];
@@ -249,8 +267,6 @@ inline void pair_law(PairList& q, const PairCoefficients& c, double dt, std::siz
       roll_z[b] = touch ? s * oz : 0.0;
     }
   }
-  large += large_here;
-  bad = std::min(bad, bad_here);
 }
 
 // Combines a thread's overlap counts into the shared ones (integers: exact in any order).
@@ -273,11 +289,14 @@ inline void combine_counts(std::uint64_t here, std::uint32_t bad_here, std::uint
 // j sides in pair order, whatever the thread count.
 template <bool kRolling>
 inline void accumulate_block(const double* kin, PairList& q, std::size_t k0, std::size_t k1,
-                             PairBlock& blk, std::size_t own_begin, double* acc) {
+                             PairBlock& blk, std::size_t own_begin, double* acc,
+                             std::uint64_t& large, std::uint32_t& bad) {
   constexpr std::size_t kOut = PairList::kOutStride;
   const double* o[PairBlock::kOutputs];
   for (int f = 0; f < PairBlock::kOutputs; ++f) o[f] = blk.out(static_cast<PairBlock::Output>(f));
   for (std::size_t k = k0; k < k1; ++k) {
+    large += o[PairBlock::kLarge][k - k0] != 0.0;
+    if (o[PairBlock::kFailing][k - k0] != 0.0) bad = std::min(bad, static_cast<std::uint32_t>(k));
     const std::size_t b = k - k0;
     const std::uint32_t i = q.i[k], j = q.j[k];
     const double ri = kin[kKinStride * i + 3];
@@ -357,15 +376,16 @@ inline void accumulate_deferred(const double* kin, const PairList& q, std::size_
 // sums do not depend on when it is finished, so the result is the same for any thread count.
 template <bool kRolling, bool kClamp, class Finish, class PairsDone>
 void force_pass(const double* kin, std::size_t n, PairList& q, const PairCoefficients& c, double dt,
-                bool fused, double* acc, Finish& finish, PairsDone& pairs_done,
-                std::uint64_t& large, std::uint32_t& bad_pair, std::uint32_t& bad_wall) {
+                bool fused, double* acc, std::vector<double>& scratch, Finish& finish,
+                PairsDone& pairs_done, std::uint64_t& large, std::uint32_t& bad_pair,
+                std::uint32_t& bad_wall) {
   const auto t = static_cast<std::size_t>(omp_get_thread_num());
   const auto threads = static_cast<std::size_t>(omp_get_num_threads());
   const std::size_t b = n * t / threads, e = n * (t + 1) / threads;
   const std::size_t lag = fused ? q.max_span : n;
   std::uint64_t large_here = 0;
   std::uint32_t bad_here = UINT32_MAX, bad_wall_here = UINT32_MAX;
-  PairBlock blk;
+  PairBlock blk(scratch);
   std::size_t next = b;  // the next particle to finish
   for (std::size_t first = b; first < e; first += kRowsPerBlock) {
     const std::size_t last = std::min(e, first + kRowsPerBlock);
@@ -373,8 +393,8 @@ void force_pass(const double* kin, std::size_t n, PairList& q, const PairCoeffic
     blk.reserve(k1 - k0);
     std::fill(acc + kAccStride * first, acc + kAccStride * last, 0.0);
     pack_rows<kRolling>(kin, q, first, last, blk, acc);
-    pair_law<kRolling, kClamp>(q, c, dt, k0, k1, blk, large_here, bad_here);
-    accumulate_block<kRolling>(kin, q, k0, k1, blk, b, acc);
+    pair_law<kRolling, kClamp>(q, c, dt, k0, k1, blk);
+    accumulate_block<kRolling>(kin, q, k0, k1, blk, b, acc, large_here, bad_here);
     for (; next + lag < last; ++next) finish(next, large_here, bad_wall_here);
   }
 #pragma omp barrier

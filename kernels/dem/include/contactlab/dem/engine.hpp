@@ -123,6 +123,7 @@ class Engine {
   PhaseTimes phases_;
   std::vector<double> kin_;  // what the pair loop reads per particle, side by side
   std::vector<double> acc_;  // per particle: the force pass's pair sums (detail::kAccStride)
+  std::vector<std::vector<double>> block_scratch_;  // per thread: the force pass's pair block
 };
 
 }  // namespace contactlab::dem
