@@ -2,10 +2,10 @@
 # Interleaved timing of contactlab's DEM step and LAMMPS gran/hooke/history on the same settled
 # bed, at 1 and 2 threads/ranks, ROUNDS times. Needs: contactlab built (Release), lmp and mpirun
 # (Debian: apt-get install lammps), the bed's checkpoint and its last frame:
-#   compare.sh BUILD_DIR CHECKPOINT FRAME.vtp [ROUNDS]
+#   compare.sh BUILD_DIR CHECKPOINT FRAME.vtp [ROUNDS] [THREAD_COUNTS]   (default "1 2")
 # Prints one line per run: code, threads, particle-steps/s.
 set -eu
-build=$1 checkpoint=$2 frame=$3 rounds=${4:-2}
+build=$1 checkpoint=$2 frame=$3 rounds=${4:-2} thread_counts=${5:-1 2}
 here=$(cd "$(dirname "$0")" && pwd)
 repo=$(cd "$here/../../.." && pwd)
 work=$(mktemp -d)
@@ -16,7 +16,7 @@ lammps_rate() {  # $1: log; the second loop is the timed one
   awk '/^Loop time/ {t = $4; n = $(NF-1); s = $9} END {printf "%.4g\n", n * s / t}' "$1"
 }
 for round in $(seq "$rounds"); do
-  for threads in 1 2; do
+  for threads in $thread_counts; do
     CONTACTLAB_DEM_BENCH_CONFIG="$repo/experiments/dem/settle-bed.json" \
     CONTACTLAB_DEM_BENCH_CHECKPOINT="$checkpoint" \
       "$build/kernels/dem/contactlab_dem_benchmark" --benchmark_filter="BM_DemStep/threads:$threads/" \
