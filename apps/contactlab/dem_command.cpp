@@ -1,11 +1,13 @@
-// `contactlab dem run|validate|timestep`: DEM runs from a JSON config (VTK frames, energy CSV,
-// checkpoints), the validation cases as a table, and the time-step study.
+// `contactlab dem run|validate|timestep|variants`: DEM runs from a JSON config (VTK frames,
+// energy CSV, checkpoints), the validation cases as a table, the time-step study, and the
+// force variants' speed against error.
 #include <fmt/core.h>
 #include <omp.h>
 
 #include <cmath>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "cli_shared.hpp"
 #include "contactlab/dem/checkpoint.hpp"
@@ -13,6 +15,7 @@
 #include "contactlab/dem/output.hpp"
 #include "contactlab/dem/timestep_study.hpp"
 #include "contactlab/dem/validation.hpp"
+#include "contactlab/dem/variant_study.hpp"
 #include "contactlab/kernels/atomic_file.hpp"
 #include "contactlab/kernels/detector.hpp"
 #include "contactlab/kernels/error.hpp"
@@ -25,6 +28,7 @@ namespace dem = contactlab::dem;
 struct DemRunCommand {
   std::string config_;
   int threads_ = 0;
+  std::string variant_;
   std::string vtk_dir_;
   std::string restart_;
   std::string checkpoint_;
@@ -34,6 +38,7 @@ struct DemRunCommand {
     dem::EngineSettings settings = config.settings;
     settings.threads = resolve_threads(threads_);
     if (settings.threads < 1) throw InputError("--threads must be >= 0");
+    if (!variant_.empty()) settings.force_variant = dem::parse_force_variant(variant_);
     // Output paths are checked before any work.
     std::unique_ptr<dem::FrameWriter> writer;
     if (!vtk_dir_.empty()) writer = std::make_unique<dem::FrameWriter>(vtk_dir_, config.name);
@@ -102,7 +107,13 @@ struct DemRunCommand {
 
 struct DemValidateCommand {
   std::string only_;
+  std::string variant_;
+  int threads_ = 1;
   int run() const {
+    if (threads_ < 0) throw InputError("--threads must be >= 0");
+    dem::set_validation_engine(
+        variant_.empty() ? dem::ForceVariant{} : dem::parse_force_variant(variant_),
+        resolve_threads(threads_));
     fmt::print("{:<58} {:<34} {:>13} {:>13} {:>10} {:>9}  {}\n", "case", "quantity", "expected",
                "measured", "error", "tolerance", "result");
     bool all = true;
@@ -156,6 +167,51 @@ struct DemTimestepCommand {
   }
 };
 
+// Every force variant (or the listed ones) against the deterministic default on a config's
+// scene: speed, speed-up and the largest position difference after the same steps.
+struct DemVariantsCommand {
+  std::string config_;
+  std::string restart_;
+  std::vector<std::string> variants_;
+  std::vector<int> threads_{1, 2};
+  std::vector<int> chunks_{1, 16};
+  std::uint64_t steps_ = 200;
+  int run() const {
+    const dem::DemConfig config = dem::read_dem_config(config_);
+    std::vector<dem::ForceVariant> variants;
+    for (const std::string& v : variants_) variants.push_back(dem::parse_force_variant(v));
+    if (variants.empty()) variants = dem::force_variants(chunks_);
+    for (const int t : threads_) {
+      if (t < 1) throw InputError("--threads: every thread count must be >= 1");
+    }
+    if (steps_ == 0) throw InputError("--steps must be >= 1");
+    const dem::Particles particles = dem::make_particles(config);
+    auto make_engine = [&](const dem::ForceVariant& variant, int threads) {
+      dem::EngineSettings settings = config.settings;
+      settings.threads = threads;
+      settings.force_variant = variant;
+      settings.warn_large_overlaps = false;
+      auto engine = std::make_unique<dem::Engine>(settings, particles);
+      if (!restart_.empty()) dem::read_checkpoint(*engine, restart_);
+      return engine;
+    };
+    fmt::print("dem variants '{}': {} particles, {} steps each after one untimed step\n",
+               config.name, particles.size(), steps_);
+    fmt::print("{:<52} {:>7} {:>16} {:>8} {:>14}  {}\n", "variant", "threads", "particle-steps/s",
+               "speedup", "max |dx| / d", "same as default");
+    for (const dem::VariantStudyRow& r :
+         dem::variant_study(make_engine, variants, threads_, steps_)) {
+      fmt::print("{:<52} {:>7} {:>16.4g} {:>8.3f} {:>14.3g}  {}\n", dem::to_string(r.variant),
+                 r.threads, r.particle_steps_per_s, r.speedup, r.max_deviation,
+                 r.bit_identical ? "bit-identical" : "differs");
+    }
+    fmt::print(
+        "\nspeedup: over ordered/static (the default) at the same thread count; max |dx| / d: "
+        "the largest position difference from the default's run, in particle diameters\n");
+    return 0;
+  }
+};
+
 }  // namespace
 
 Subcommand add_dem_command(CLI::App& app) {
@@ -165,6 +221,8 @@ Subcommand add_dem_command(CLI::App& app) {
   CLI::App* run_app = sub->add_subcommand("run", "run a DEM config");
   run_app->add_option("config", run->config_, "DEM config (JSON, docs/dem.md)")->required();
   run_app->add_option("--threads", run->threads_, "OpenMP threads (0 = OpenMP's default)");
+  run_app->add_option("--variant", run->variant_,
+                      "force variant, e.g. per-thread/dynamic,4 (default ordered/static)");
   run_app->add_option("--vtk", run->vtk_dir_, "write DIR/<name>.pvd, frames, energy CSV, last.chk");
   run_app->add_option("--restart", run->restart_, "continue from a checkpoint of this config");
   run_app->add_option("--checkpoint", run->checkpoint_,
@@ -172,6 +230,19 @@ Subcommand add_dem_command(CLI::App& app) {
   auto validate = std::make_shared<DemValidateCommand>();
   CLI::App* validate_app = sub->add_subcommand("validate", "run every validation case");
   validate_app->add_option("--case", validate->only_, "run only this case");
+  validate_app->add_option("--variant", validate->variant_, "run the cases on this force variant");
+  validate_app->add_option("--threads", validate->threads_, "threads of every case (default 1)");
+  auto variants = std::make_shared<DemVariantsCommand>();
+  CLI::App* variants_app = sub->add_subcommand(
+      "variants", "force variants against the default: speed and position difference");
+  variants_app->add_option("config", variants->config_, "DEM config")->required();
+  variants_app->add_option("--restart", variants->restart_, "start from this checkpoint");
+  variants_app->add_option("--variant", variants->variants_, "only these (repeatable)");
+  variants_app->add_option("--threads", variants->threads_, "thread counts (default 1,2)")
+      ->delimiter(',');
+  variants_app->add_option("--chunks", variants->chunks_, "chunk sizes to enumerate (1,16)")
+      ->delimiter(',');
+  variants_app->add_option("--steps", variants->steps_, "timed steps per variant (200)");
   auto timestep = std::make_shared<DemTimestepCommand>();
   CLI::App* timestep_app =
       sub->add_subcommand("timestep", "stable limit, recommended dt, speed against error");
@@ -181,6 +252,7 @@ Subcommand add_dem_command(CLI::App& app) {
   return {sub, [=] {
             if (*run_app) return run->run();
             if (*validate_app) return validate->run();
+            if (*variants_app) return variants->run();
             return timestep->run();
           }};
 }

@@ -103,5 +103,28 @@ TEST(DemCli, TimestepPrintsLimitAndTable) {
   EXPECT_NE(r.output.find("t_c/200"), std::string::npos);
 }
 
+// Every validation case also passes on the report's variant (per-thread arrays, dynamic
+// schedule, serial walls) at two threads.
+TEST(DemCli, ValidatePassesOnTheReportsVariant) {
+  const auto r = run_command(contactlab_exe() +
+                             " dem validate --variant per-thread/dynamic,1/walls=serial/"
+                             "update=separate --threads 2");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("All cases pass."), std::string::npos) << r.output;
+}
+
+TEST(DemCli, VariantsTablesSpeedAgainstTheDefault) {
+  const auto r = run_command(contactlab_exe() + " dem variants " + config_path() +
+                             " --steps 20 --threads 1,2 --variant atomic/dynamic,8"
+                             " --variant ordered/static/update=separate");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("atomic/dynamic,8"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("bit-identical"), std::string::npos) << r.output;
+  const auto bad = run_command(contactlab_exe() + " dem variants " + config_path() +
+                               " --variant ordered/dynamic,4");
+  EXPECT_EQ(bad.exit_code, 2) << bad.output;
+  EXPECT_NE(bad.output.find("static block partition"), std::string::npos) << bad.output;
+}
+
 }  // namespace
 }  // namespace contactlab::test

@@ -78,7 +78,7 @@ std::unique_ptr<Engine> fresh_engine(int threads, bool fused) {
   Bed& b = bed();
   EngineSettings s = b.settings;
   s.threads = threads;
-  s.fused_force_pass = fused;
+  s.force_variant.separate_update = !fused;
   s.warn_large_overlaps = false;
   auto engine = std::make_unique<Engine>(s, b.initial);
   if (!b.checkpoint.empty()) {

@@ -225,16 +225,16 @@ void Engine::compute_forces(bool final_kick) {
   // A particle's finish: its pair sums (its own row, then its j sides in pair order: fixed,
   // so bit-identical for any thread count), walls, gravity, kick.
   double* acc = acc_.data();
-  auto finish = [&](std::size_t a, std::uint64_t& large_here, std::uint32_t& bad_wall_here) {
+  // Particle a's wall contacts added to its sums f (force), t (torque) and touching.
+  auto add_walls = [&](std::size_t a, double& fx, double& fy, double& fz, double& tx, double& ty,
+                       double& tz, double& touching, std::uint64_t& large_here,
+                       std::uint32_t& bad_wall_here) {
     // a's position, radius, mass and synchronised velocities from its kin_ block (one or two
     // cache lines, not nine arrays); the same values as the particle arrays.
     const double* ka = &kin_[kKinStride * a];
     const double xa = ka[0], ya = ka[1], za = ka[2], r = ka[3], mass = ka[7];
     const double pvxa = ka[4], pvya = ka[5], pvza = ka[6], pwxa = ka[8], pwya = ka[9],
                  pwza = ka[10];
-    const double* sum = acc + detail::kAccStride * a;
-    double fx = sum[0], fy = sum[1], fz = sum[2], tx = sum[3], ty = sum[4], tz = sum[5];
-    double touching = sum[6];  // exact: a sum of ones
     for (std::size_t w = 0; w < wall_count; ++w) {
       double* hx = &p.wall_spring[3 * w][a];
       double* hy = &p.wall_spring[3 * w + 1][a];
@@ -293,6 +293,22 @@ void Engine::compute_forces(bool final_kick) {
       }
       touching += fn > 0;
     }
+  };
+  // The walls alone, into a's sums (walls=serial: one thread after all pairs).
+  auto walls = [&](std::size_t a, std::uint64_t& large_here, std::uint32_t& bad_wall_here) {
+    double* sum = acc + detail::kAccStride * a;
+    add_walls(a, sum[0], sum[1], sum[2], sum[3], sum[4], sum[5], sum[6], large_here, bad_wall_here);
+  };
+  // A particle's finish: its sums (pairs, and its walls unless they were added already),
+  // gravity, drag, kick.
+  auto finish = [&](std::size_t a, bool with_walls, std::uint64_t& large_here,
+                    std::uint32_t& bad_wall_here) {
+    const double* ka = &kin_[kKinStride * a];
+    const double mass = ka[7], pvxa = ka[4], pvya = ka[5], pvza = ka[6];
+    const double* sum = acc + detail::kAccStride * a;
+    double fx = sum[0], fy = sum[1], fz = sum[2], tx = sum[3], ty = sum[4], tz = sum[5];
+    double touching = sum[6];  // exact: a sum of ones
+    if (with_walls) add_walls(a, fx, fy, fz, tx, ty, tz, touching, large_here, bad_wall_here);
     p.contacts[a] = static_cast<std::uint16_t>(touching);
     p.force_magnitude[a] = std::sqrt(fx * fx + fy * fy + fz * fz);
     // Optional background drag (settling only): F = -c v with the synchronised velocity.
@@ -322,11 +338,31 @@ void Engine::compute_forces(bool final_kick) {
     if (omp_get_thread_num() == 0) t_pairs = omp_get_wtime();
   };
   // The law's switches chosen at compile time.
+  const ForceVariant& variant = settings_.force_variant;
+  const bool ordered = variant.accumulation == Accumulation::kOrdered;
+  const bool atomic = variant.accumulation == Accumulation::kAtomic;
+  if (!ordered) {
+    const Schedule& sc = variant.schedule;
+    omp_set_schedule(sc.kind == ScheduleKind::kStatic    ? omp_sched_static
+                     : sc.kind == ScheduleKind::kDynamic ? omp_sched_dynamic
+                                                         : omp_sched_guided,
+                     sc.chunk);
+    thread_acc_.resize(static_cast<std::size_t>(settings_.threads));
+  }
   auto passes = [&]<bool kRolling, bool kClamp>() {
 #pragma omp parallel num_threads(settings_.threads)
-    detail::force_pass<kRolling, kClamp>(kin, n, q, c, dt, settings_.fused_force_pass, acc,
-                                         block_scratch_[omp_get_thread_num()], finish, pairs_done,
-                                         large, bad_pair, bad_wall_particle);
+    {
+      std::vector<double>& scratch = block_scratch_[omp_get_thread_num()];
+      if (ordered) {
+        detail::force_pass<kRolling, kClamp>(kin, n, q, c, dt, !variant.separate_update,
+                                             variant.serial_walls, acc, scratch, finish, walls,
+                                             pairs_done, large, bad_pair, bad_wall_particle);
+      } else {
+        detail::force_pass_shared<kRolling, kClamp>(kin, n, q, c, dt, atomic, variant.serial_walls,
+                                                    acc, thread_acc_, scratch, finish, walls,
+                                                    pairs_done, large, bad_pair, bad_wall_particle);
+      }
+    }
   };
   if (rolling) {
     c.clamp ? passes.template operator()<true, true>() : passes.template operator()<true, false>();
@@ -334,7 +370,8 @@ void Engine::compute_forces(bool final_kick) {
     c.clamp ? passes.template operator()<false, true>()
             : passes.template operator()<false, false>();
   }
-  if (settings_.fused_force_pass) t_pairs = omp_get_wtime();  // all of it counts as pair forces
+  // The fused ordered pass finishes particles among the pairs: all of it counts as pair forces.
+  if (ordered && !variant.separate_update) t_pairs = omp_get_wtime();
   const double t2 = omp_get_wtime();
   phases_.pair_forces_s += t_pairs - t0;
   phases_.walls_gather_s += t2 - t_pairs;

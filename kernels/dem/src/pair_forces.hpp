@@ -368,17 +368,18 @@ inline void accumulate_deferred(const double* kin, const PairList& q, std::size_
 
 // The force pass: each thread takes a contiguous range of rows [b, e), computes them a block
 // at a time (pack_rows, pair_law on SIMD lanes, accumulate_block) and
-// finishes particle a (finish(a, large, bad_wall): walls, gravity, kick, from acc[a]) as soon
+// finishes particle a (finish(a, with_walls, large, bad_wall): walls unless serial_walls, when
+// walls(a, ...) adds them for every particle in one thread first; gravity, kick) as soon
 // as the rows holding its j sides, (a, a + lag], are done; lag = max_span finishes particles
 // while their sums are still in cache (fused), lag = n finishes every particle after the
 // barrier (split: the pair phase timed alone; `pairs_done` is called once then). The last
 // max_span particles of a range wait for the next range's rows, after a barrier. A particle's
 // sums do not depend on when it is finished, so the result is the same for any thread count.
-template <bool kRolling, bool kClamp, class Finish, class PairsDone>
+template <bool kRolling, bool kClamp, class Finish, class Walls, class PairsDone>
 void force_pass(const double* kin, std::size_t n, PairList& q, const PairCoefficients& c, double dt,
-                bool fused, double* acc, std::vector<double>& scratch, Finish& finish,
-                PairsDone& pairs_done, std::uint64_t& large, std::uint32_t& bad_pair,
-                std::uint32_t& bad_wall) {
+                bool fused, bool serial_walls, double* acc, std::vector<double>& scratch,
+                Finish& finish, Walls& walls, PairsDone& pairs_done, std::uint64_t& large,
+                std::uint32_t& bad_pair, std::uint32_t& bad_wall) {
   const auto t = static_cast<std::size_t>(omp_get_thread_num());
   const auto threads = static_cast<std::size_t>(omp_get_num_threads());
   const std::size_t b = n * t / threads, e = n * (t + 1) / threads;
@@ -395,14 +396,131 @@ void force_pass(const double* kin, std::size_t n, PairList& q, const PairCoeffic
     pack_rows<kRolling>(kin, q, first, last, blk, acc);
     pair_law<kRolling, kClamp>(q, c, dt, k0, k1, blk);
     accumulate_block<kRolling>(kin, q, k0, k1, blk, b, acc, large_here, bad_here);
-    for (; next + lag < last; ++next) finish(next, large_here, bad_wall_here);
+    for (; next + lag < last; ++next) finish(next, true, large_here, bad_wall_here);
   }
 #pragma omp barrier
   pairs_done();
   for (std::size_t a = std::max(next, e > q.max_span ? e - q.max_span : 0); a < e; ++a) {
     accumulate_deferred<kRolling>(kin, q, a, e, acc);
   }
-  for (; next < e; ++next) finish(next, large_here, bad_wall_here);
+  if (serial_walls) {  // every particle's pairs are in (fused is off: no one finished yet)
+#pragma omp barrier
+#pragma omp single
+    for (std::size_t a = 0; a < n; ++a) walls(a, large_here, bad_wall_here);
+  }
+  for (; next < e; ++next) finish(next, !serial_walls, large_here, bad_wall_here);
+  combine_counts(large_here, bad_here, large, bad_pair);
+  combine_counts(0, bad_wall_here, large, bad_wall);
+}
+
+}  // namespace contactlab::dem::detail
+
+namespace contactlab::dem::detail {
+
+// Adds a value to a shared sum: atomically (kAtomic: threads may add to the same particle)
+// or plainly (a per-thread array).
+template <bool kAtomic>
+inline void add_to(double& sum, double value) {
+  if constexpr (kAtomic) {
+#pragma omp atomic
+    sum += value;
+  } else {
+    sum += value;
+  }
+}
+
+// The block's outputs added to `target` (a thread's own array, or with kAtomic the shared
+// one): i's row summed in registers, then added; each j side subtracted.
+template <bool kRolling, bool kAtomic>
+inline void accumulate_shared(const double* kin, const PairList& q, std::size_t first,
+                              std::size_t last, PairBlock& blk, double* target,
+                              std::uint64_t& large, std::uint32_t& bad) {
+  const double* o[PairBlock::kOutputs];
+  for (int f = 0; f < PairBlock::kOutputs; ++f) o[f] = blk.out(static_cast<PairBlock::Output>(f));
+  const std::size_t k0 = q.rows[first];
+  for (std::size_t i = first; i < last; ++i) {
+    const double ri = kin[kKinStride * i + 3];
+    double sum[7] = {0, 0, 0, 0, 0, 0, 0};
+    for (std::size_t k = q.rows[i]; k < q.rows[i + 1]; ++k) {
+      const std::size_t b = k - k0;
+      large += o[PairBlock::kLarge][b] != 0.0;
+      if (o[PairBlock::kFailing][b] != 0.0) bad = std::min(bad, static_cast<std::uint32_t>(k));
+      const double roll[3] = {kRolling ? o[PairBlock::kRollX][b] : 0.0,
+                              kRolling ? o[PairBlock::kRollY][b] : 0.0,
+                              kRolling ? o[PairBlock::kRollZ][b] : 0.0};
+      for (int d = 0; d < 3; ++d) {
+        sum[d] += o[PairBlock::kFx + d][b];
+        sum[3 + d] -= ri * o[PairBlock::kCx + d][b];
+        if constexpr (kRolling) sum[3 + d] += roll[d];
+      }
+      sum[6] += o[PairBlock::kTouch][b];
+      const std::uint32_t j = q.j[k];
+      const double rj = kin[kKinStride * j + 3];
+      double* aj = target + kAccStride * j;
+      for (int d = 0; d < 3; ++d) {
+        add_to<kAtomic>(aj[d], -o[PairBlock::kFx + d][b]);
+        add_to<kAtomic>(aj[3 + d], -(rj * o[PairBlock::kCx + d][b]) - roll[d]);
+      }
+      add_to<kAtomic>(aj[6], o[PairBlock::kTouch][b]);
+    }
+    double* ai = target + kAccStride * i;
+    for (int f = 0; f < 7; ++f) add_to<kAtomic>(ai[f], sum[f]);
+  }
+}
+
+// The force pass of the non-ordered accumulations (per-thread arrays, atomics): blocks of rows
+// shared out by the variant's schedule (`omp for schedule(runtime)`: the caller sets it), then
+// the per-thread arrays summed in thread order, the walls by one thread when serial_walls, and
+// the update (finish(a, with_walls, ...)) shared out by the same schedule.
+template <bool kRolling, bool kClamp, class Finish, class Walls, class PairsDone>
+void force_pass_shared(const double* kin, std::size_t n, PairList& q, const PairCoefficients& c,
+                       double dt, bool atomic, bool serial_walls, double* acc,
+                       std::vector<std::vector<double>>& thread_acc, std::vector<double>& scratch,
+                       Finish& finish, Walls& walls, PairsDone& pairs_done, std::uint64_t& large,
+                       std::uint32_t& bad_pair, std::uint32_t& bad_wall) {
+  const auto t = static_cast<std::size_t>(omp_get_thread_num());
+  const auto threads = static_cast<std::size_t>(omp_get_num_threads());
+  std::uint64_t large_here = 0;
+  std::uint32_t bad_here = UINT32_MAX, bad_wall_here = UINT32_MAX;
+  double* target = acc;
+  if (atomic) {
+#pragma omp for schedule(static)
+    for (std::size_t a = 0; a < kAccStride * n; ++a) acc[a] = 0.0;
+  } else {
+    thread_acc[t].assign(kAccStride * n, 0.0);  // the report's cost: one array per thread
+    target = thread_acc[t].data();
+  }
+  PairBlock blk(scratch);
+  const std::size_t blocks = (n + kRowsPerBlock - 1) / kRowsPerBlock;
+#pragma omp for schedule(runtime) nowait
+  for (std::size_t block = 0; block < blocks; ++block) {
+    const std::size_t first = block * kRowsPerBlock, last = std::min(n, first + kRowsPerBlock);
+    const std::size_t k0 = q.rows[first], k1 = q.rows[last];
+    blk.reserve(k1 - k0);
+    pack_rows<kRolling>(kin, q, first, last, blk, target);
+    pair_law<kRolling, kClamp>(q, c, dt, k0, k1, blk);
+    if (atomic) {
+      accumulate_shared<kRolling, true>(kin, q, first, last, blk, target, large_here, bad_here);
+    } else {
+      accumulate_shared<kRolling, false>(kin, q, first, last, blk, target, large_here, bad_here);
+    }
+  }
+#pragma omp barrier
+  pairs_done();
+  if (!atomic) {  // the reduction, in thread order
+#pragma omp for schedule(static)
+    for (std::size_t a = 0; a < kAccStride * n; ++a) {
+      double sum = thread_acc[0][a];
+      for (std::size_t u = 1; u < threads; ++u) sum += thread_acc[u][a];
+      acc[a] = sum;
+    }
+  }
+  if (serial_walls) {
+#pragma omp single
+    for (std::size_t a = 0; a < n; ++a) walls(a, large_here, bad_wall_here);
+  }
+#pragma omp for schedule(runtime)
+  for (std::size_t a = 0; a < n; ++a) finish(a, !serial_walls, large_here, bad_wall_here);
   combine_counts(large_here, bad_here, large, bad_pair);
   combine_counts(0, bad_wall_here, large, bad_wall);
 }

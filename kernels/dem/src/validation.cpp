@@ -6,6 +6,20 @@
 
 namespace contactlab::dem {
 
+namespace {
+EngineSettings& validation_defaults() {
+  static EngineSettings settings;
+  return settings;
+}
+}  // namespace
+
+void set_validation_engine(const ForceVariant& variant, int threads) {
+  validation_defaults().force_variant = variant;
+  validation_defaults().threads = threads;
+}
+
+EngineSettings validation_engine() { return validation_defaults(); }
+
 ValidationRow make_row(std::string case_name, std::string quantity, double expected,
                        double measured, double tolerance, bool relative, std::string note) {
   ValidationRow row;
@@ -23,7 +37,7 @@ ValidationRow make_row(std::string case_name, std::string quantity, double expec
 
 ImpactResult run_normal_impact(const ContactLaw& law, double r1, double r2, double density,
                                double v0, double dt_s, VelocityInForces velocity, double phase) {
-  EngineSettings s;
+  EngineSettings s = validation_engine();
   s.warn_large_overlaps = false;
   s.law = law;
   s.dt_s = dt_s;

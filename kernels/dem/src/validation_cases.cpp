@@ -58,7 +58,7 @@ std::vector<ValidationRow> normal_impacts() {
 
 // A few dozen elastic frictionless spheres in a closed box of six planes.
 std::vector<ValidationRow> elastic_gas() {
-  EngineSettings s;
+  EngineSettings s = validation_engine();
   s.warn_large_overlaps = false;  // the table is the output
   s.law = impact_law(1.0, true);
   s.dt_s = kTc / 50;
@@ -103,7 +103,7 @@ std::vector<ValidationRow> elastic_gas() {
 
 // Dissipative, frictional spheres in a fully periodic box: total momentum stays.
 std::vector<ValidationRow> periodic_momentum() {
-  EngineSettings s;
+  EngineSettings s = validation_engine();
   s.warn_large_overlaps = false;  // the table is the output
   s.law = impact_law(0.5, true);
   s.law.friction = 0.5;
@@ -151,7 +151,7 @@ std::vector<ValidationRow> periodic_momentum() {
 // A column of N spheres on a plane: the bottom overlap carries all the weight; no creep.
 std::vector<ValidationRow> resting_column() {
   const int n = 10;
-  EngineSettings s;
+  EngineSettings s = validation_engine();
   s.warn_large_overlaps = false;  // the table is the output
   s.law.kind = NormalLawKind::kStiffness;
   s.law.normal_stiffness = 1000.0;  // N/m
@@ -204,7 +204,7 @@ std::vector<ValidationRow> oblique_impacts() {
   std::vector<ValidationRow> rows;
   const double sliding = 3.5 * mu * (1 + e), sticking = 3.5 * mu;
   for (const double angle_deg : {5.0, 10.0, 15.0, 20.0, 30.0, 40.0, 50.0, 60.0, 70.0, 80.0, 85.0}) {
-    EngineSettings s;
+    EngineSettings s = validation_engine();
     s.warn_large_overlaps = false;  // the table is the output
     s.law = impact_law(e, true);
     s.law.contact_time_s = tc;
@@ -259,7 +259,7 @@ std::vector<ValidationRow> oblique_impacts() {
 
 // A sphere sliding on a plane with friction ends rolling at 5/7 of its initial speed.
 std::vector<ValidationRow> slide_to_roll() {
-  EngineSettings s;
+  EngineSettings s = validation_engine();
   s.warn_large_overlaps = false;  // the table is the output
   s.law = impact_law(0.5, true);
   s.law.friction = 0.3;
@@ -286,7 +286,7 @@ std::vector<ValidationRow> slide_to_roll() {
 // Rolling resistance (constant torque mu_r R F_n against the rotation): a sphere rolling on a
 // plane decelerates at a = 5/7 mu_r g (m a = -f, I a / R = f R - mu_r R m g).
 std::vector<ValidationRow> rolling_resistance() {
-  EngineSettings s;
+  EngineSettings s = validation_engine();
   s.warn_large_overlaps = false;  // the table is the output
   s.law = impact_law(0.5, true);
   s.law.friction = 0.5;
@@ -338,7 +338,7 @@ std::vector<ValidationRow> stability_checks() {
     p.vx[1] = -speed;
     return p;
   };
-  EngineSettings s;
+  EngineSettings s = validation_engine();
   s.warn_large_overlaps = false;  // the table is the output
   s.law = impact_law(0.5, true);
   s.domain.lo = {-1, -1, -1};

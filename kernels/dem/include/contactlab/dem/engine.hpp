@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "contactlab/dem/contact_law.hpp"
+#include "contactlab/dem/force_variant.hpp"
 #include "contactlab/dem/pair_list.hpp"
 #include "contactlab/dem/particles.hpp"
 #include "contactlab/dem/walls.hpp"
@@ -36,10 +37,10 @@ struct EngineSettings {
   // Background drag F = -c v [kg/s] on every particle; 0 = off. For settling beds only (it
   // breaks the energy balance: its work counts as dissipated).
   double viscous_damping = 0.0;
-  // One pass of pair rows with each particle's gather as soon as its rows are done (fast);
-  // false: the pair loop, then the gather (slower; PhaseTimes then splits the two). Both give
-  // bit-identical results.
-  bool fused_force_pass = true;  // the one warning per run on stderr
+  // How the force pass runs in parallel (force_variant.hpp). The default, ordered with the
+  // fused update, is bit-identical for any thread count; with update=separate PhaseTimes
+  // splits the pair forces from walls + finish + kick.
+  ForceVariant force_variant;
 };
 
 // Phase times of step() [s], summed since construction. With the fused force pass the pair
@@ -124,6 +125,7 @@ class Engine {
   std::vector<double> kin_;  // what the pair loop reads per particle, side by side
   std::vector<double> acc_;  // per particle: the force pass's pair sums (detail::kAccStride)
   std::vector<std::vector<double>> block_scratch_;  // per thread: the force pass's pair block
+  std::vector<std::vector<double>> thread_acc_;     // per thread: sums (per-thread accumulation)
 };
 
 }  // namespace contactlab::dem

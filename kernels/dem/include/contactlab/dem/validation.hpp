@@ -36,6 +36,12 @@ struct ValidationCase {
 // Every case, in the order `dem validate` prints them.
 const std::vector<ValidationCase>& validation_cases();
 
+// The engine settings every case starts from: defaults, except the force variant and thread
+// count chosen here (`dem validate --variant V --threads T` runs every case on that variant).
+// Process-wide; set it before running cases, not while they run.
+void set_validation_engine(const ForceVariant& variant, int threads);
+EngineSettings validation_engine();
+
 // A two-body head-on impact (sphere-sphere of radii r1, r2, or a sphere on a plane wall when
 // r2 = 0) at relative speed v0: the measured restitution and normal-force duration. `phase`
 // in [0, 1) shifts the first touch within a step (the dashpot force jumps on at the first
