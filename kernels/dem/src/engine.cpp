@@ -10,7 +10,7 @@
 #include <limits>
 
 #include "contactlab/kernels/error.hpp"
-#include "pair_forces.hpp"
+#include "force_pass.hpp"
 
 namespace contactlab::dem {
 using detail::kFailFraction;

@@ -1,0 +1,268 @@
+// The DEM force pass (private to src/): blocks of rows through pack_rows and pair_law, their
+// outputs summed per particle (ordered: in pair order for any thread count; per-thread arrays
+// or atomics: the report's accumulations), and each particle finished.
+#pragma once
+
+#include <omp.h>
+
+#include <algorithm>
+#include <cstdint>
+#include <vector>
+
+#include "pair_block.hpp"
+
+namespace contactlab::dem::detail {
+
+// Combines a thread's overlap counts into the shared ones (integers: exact in any order).
+inline void combine_counts(std::uint64_t here, std::uint32_t bad_here, std::uint64_t& total,
+                           std::uint32_t& bad) {
+  if (here > 0) {
+#pragma omp atomic
+    total += here;
+  }
+  if (bad_here != UINT32_MAX) {
+#pragma omp critical(dem_bad_index)
+    bad = std::min(bad, bad_here);
+  }
+}
+
+// Adds the block's pair outputs to the particles' sums in pair order: the i side to acc[i],
+// the j side to acc[j] when this thread owns j (j >= own_begin); otherwise the outputs are
+// kept in q.out / q.roll_* for j's owner, which adds them after the barrier (they come from
+// later rows, so pair order still holds). Particle a's sum is therefore its own row, then its
+// j sides in pair order, whatever the thread count.
+template <bool kRolling>
+inline void accumulate_block(const double* kin, PairList& q, std::size_t k0, std::size_t k1,
+                             PairBlock& blk, std::size_t own_begin, double* acc,
+                             std::uint64_t& large, std::uint32_t& bad) {
+  constexpr std::size_t kOut = PairList::kOutStride;
+  const double* o[PairBlock::kOutputs];
+  for (int f = 0; f < PairBlock::kOutputs; ++f) o[f] = blk.out(static_cast<PairBlock::Output>(f));
+  for (std::size_t k = k0; k < k1; ++k) {
+    large += o[PairBlock::kLarge][k - k0] != 0.0;
+    if (o[PairBlock::kFailing][k - k0] != 0.0) bad = std::min(bad, static_cast<std::uint32_t>(k));
+    const std::size_t b = k - k0;
+    const std::uint32_t i = q.i[k], j = q.j[k];
+    const double ri = kin[kKinStride * i + 3];
+    double* ai = acc + kAccStride * i;
+    ai[0] += o[PairBlock::kFx][b];
+    ai[1] += o[PairBlock::kFy][b];
+    ai[2] += o[PairBlock::kFz][b];
+    ai[3] -= ri * o[PairBlock::kCx][b];
+    ai[4] -= ri * o[PairBlock::kCy][b];
+    ai[5] -= ri * o[PairBlock::kCz][b];
+    ai[6] += o[PairBlock::kTouch][b];
+    if constexpr (kRolling) {
+      ai[3] += o[PairBlock::kRollX][b];
+      ai[4] += o[PairBlock::kRollY][b];
+      ai[5] += o[PairBlock::kRollZ][b];
+    }
+    if (j < own_begin) {  // another thread's particle: left for its owner
+      for (int f = 0; f <= PairBlock::kTouch; ++f) q.out[kOut * k + f] = o[f][b];
+      if constexpr (kRolling) {
+        q.roll_x[k] = o[PairBlock::kRollX][b];
+        q.roll_y[k] = o[PairBlock::kRollY][b];
+        q.roll_z[k] = o[PairBlock::kRollZ][b];
+      }
+      continue;
+    }
+    const double rj = kin[kKinStride * j + 3];
+    double* aj = acc + kAccStride * j;
+    aj[0] -= o[PairBlock::kFx][b];
+    aj[1] -= o[PairBlock::kFy][b];
+    aj[2] -= o[PairBlock::kFz][b];
+    aj[3] -= rj * o[PairBlock::kCx][b];
+    aj[4] -= rj * o[PairBlock::kCy][b];
+    aj[5] -= rj * o[PairBlock::kCz][b];
+    aj[6] += o[PairBlock::kTouch][b];
+    if constexpr (kRolling) {
+      aj[3] -= o[PairBlock::kRollX][b];
+      aj[4] -= o[PairBlock::kRollY][b];
+      aj[5] -= o[PairBlock::kRollZ][b];
+    }
+  }
+}
+
+// Adds to particle a's sum the j sides that later threads left in q.out (pairs from rows at
+// or after own_end), in pair order.
+template <bool kRolling>
+inline void accumulate_deferred(const double* kin, const PairList& q, std::size_t a,
+                                std::size_t own_end, double* acc) {
+  constexpr std::size_t kOut = PairList::kOutStride;
+  const double r = kin[kKinStride * a + 3];
+  double* aa = acc + kAccStride * a;
+  for (std::size_t e = q.j_offsets[a]; e < q.j_offsets[a + 1]; ++e) {
+    const std::uint32_t k = q.j_pairs[e];
+    if (q.i[k] < own_end) continue;  // added directly
+    const double* o = &q.out[kOut * k];
+    aa[0] -= o[0];
+    aa[1] -= o[1];
+    aa[2] -= o[2];
+    aa[3] -= r * o[3];
+    aa[4] -= r * o[4];
+    aa[5] -= r * o[5];
+    aa[6] += o[6];
+    if constexpr (kRolling) {
+      aa[3] -= q.roll_x[k];
+      aa[4] -= q.roll_y[k];
+      aa[5] -= q.roll_z[k];
+    }
+  }
+}
+
+// The force pass: each thread takes a contiguous range of rows [b, e), computes them a block
+// at a time (pack_rows, pair_law on SIMD lanes, accumulate_block) and
+// finishes particle a (finish(a, with_walls, large, bad_wall): walls unless serial_walls, when
+// walls(a, ...) adds them for every particle in one thread first; gravity, kick) as soon
+// as the rows holding its j sides, (a, a + lag], are done; lag = max_span finishes particles
+// while their sums are still in cache (fused), lag = n finishes every particle after the
+// barrier (split: the pair phase timed alone; `pairs_done` is called once then). The last
+// max_span particles of a range wait for the next range's rows, after a barrier. A particle's
+// sums do not depend on when it is finished, so the result is the same for any thread count.
+template <bool kRolling, bool kClamp, class Finish, class Walls, class PairsDone>
+void force_pass(const double* kin, std::size_t n, PairList& q, const PairCoefficients& c, double dt,
+                bool fused, bool serial_walls, double* acc, std::vector<double>& scratch,
+                Finish& finish, Walls& walls, PairsDone& pairs_done, std::uint64_t& large,
+                std::uint32_t& bad_pair, std::uint32_t& bad_wall) {
+  const auto t = static_cast<std::size_t>(omp_get_thread_num());
+  const auto threads = static_cast<std::size_t>(omp_get_num_threads());
+  const std::size_t b = n * t / threads, e = n * (t + 1) / threads;
+  const std::size_t lag = fused ? q.max_span : n;
+  std::uint64_t large_here = 0;
+  std::uint32_t bad_here = UINT32_MAX, bad_wall_here = UINT32_MAX;
+  PairBlock blk(scratch);
+  std::size_t next = b;  // the next particle to finish
+  for (std::size_t first = b; first < e; first += kRowsPerBlock) {
+    const std::size_t last = std::min(e, first + kRowsPerBlock);
+    const std::size_t k0 = q.rows[first], k1 = q.rows[last];
+    blk.reserve(k1 - k0);
+    std::fill(acc + kAccStride * first, acc + kAccStride * last, 0.0);
+    pack_rows<kRolling>(kin, q, first, last, blk, acc);
+    pair_law<kRolling, kClamp>(q, c, dt, k0, k1, blk);
+    accumulate_block<kRolling>(kin, q, k0, k1, blk, b, acc, large_here, bad_here);
+    for (; next + lag < last; ++next) finish(next, true, large_here, bad_wall_here);
+  }
+#pragma omp barrier
+  pairs_done();
+  for (std::size_t a = std::max(next, e > q.max_span ? e - q.max_span : 0); a < e; ++a) {
+    accumulate_deferred<kRolling>(kin, q, a, e, acc);
+  }
+  if (serial_walls) {  // every particle's pairs are in (fused is off: no one finished yet)
+#pragma omp barrier
+#pragma omp single
+    for (std::size_t a = 0; a < n; ++a) walls(a, large_here, bad_wall_here);
+  }
+  for (; next < e; ++next) finish(next, !serial_walls, large_here, bad_wall_here);
+  combine_counts(large_here, bad_here, large, bad_pair);
+  combine_counts(0, bad_wall_here, large, bad_wall);
+}
+
+// Adds a value to a shared sum: atomically (kAtomic: threads may add to the same particle)
+// or plainly (a per-thread array).
+template <bool kAtomic>
+inline void add_to(double& sum, double value) {
+  if constexpr (kAtomic) {
+#pragma omp atomic
+    sum += value;
+  } else {
+    sum += value;
+  }
+}
+
+// The block's outputs added to `target` (a thread's own array, or with kAtomic the shared
+// one): i's row summed in registers, then added; each j side subtracted.
+template <bool kRolling, bool kAtomic>
+inline void accumulate_shared(const double* kin, const PairList& q, std::size_t first,
+                              std::size_t last, PairBlock& blk, double* target,
+                              std::uint64_t& large, std::uint32_t& bad) {
+  const double* o[PairBlock::kOutputs];
+  for (int f = 0; f < PairBlock::kOutputs; ++f) o[f] = blk.out(static_cast<PairBlock::Output>(f));
+  const std::size_t k0 = q.rows[first];
+  for (std::size_t i = first; i < last; ++i) {
+    const double ri = kin[kKinStride * i + 3];
+    double sum[7] = {0, 0, 0, 0, 0, 0, 0};
+    for (std::size_t k = q.rows[i]; k < q.rows[i + 1]; ++k) {
+      const std::size_t b = k - k0;
+      large += o[PairBlock::kLarge][b] != 0.0;
+      if (o[PairBlock::kFailing][b] != 0.0) bad = std::min(bad, static_cast<std::uint32_t>(k));
+      const double roll[3] = {kRolling ? o[PairBlock::kRollX][b] : 0.0,
+                              kRolling ? o[PairBlock::kRollY][b] : 0.0,
+                              kRolling ? o[PairBlock::kRollZ][b] : 0.0};
+      for (int d = 0; d < 3; ++d) {
+        sum[d] += o[PairBlock::kFx + d][b];
+        sum[3 + d] -= ri * o[PairBlock::kCx + d][b];
+        if constexpr (kRolling) sum[3 + d] += roll[d];
+      }
+      sum[6] += o[PairBlock::kTouch][b];
+      const std::uint32_t j = q.j[k];
+      const double rj = kin[kKinStride * j + 3];
+      double* aj = target + kAccStride * j;
+      for (int d = 0; d < 3; ++d) {
+        add_to<kAtomic>(aj[d], -o[PairBlock::kFx + d][b]);
+        add_to<kAtomic>(aj[3 + d], -(rj * o[PairBlock::kCx + d][b]) - roll[d]);
+      }
+      add_to<kAtomic>(aj[6], o[PairBlock::kTouch][b]);
+    }
+    double* ai = target + kAccStride * i;
+    for (int f = 0; f < 7; ++f) add_to<kAtomic>(ai[f], sum[f]);
+  }
+}
+
+// The force pass of the non-ordered accumulations (per-thread arrays, atomics): blocks of rows
+// shared out by the variant's schedule (`omp for schedule(runtime)`: the caller sets it), then
+// the per-thread arrays summed in thread order, the walls by one thread when serial_walls, and
+// the update (finish(a, with_walls, ...)) shared out by the same schedule.
+template <bool kRolling, bool kClamp, class Finish, class Walls, class PairsDone>
+void force_pass_shared(const double* kin, std::size_t n, PairList& q, const PairCoefficients& c,
+                       double dt, bool atomic, bool serial_walls, double* acc,
+                       std::vector<std::vector<double>>& thread_acc, std::vector<double>& scratch,
+                       Finish& finish, Walls& walls, PairsDone& pairs_done, std::uint64_t& large,
+                       std::uint32_t& bad_pair, std::uint32_t& bad_wall) {
+  const auto t = static_cast<std::size_t>(omp_get_thread_num());
+  const auto threads = static_cast<std::size_t>(omp_get_num_threads());
+  std::uint64_t large_here = 0;
+  std::uint32_t bad_here = UINT32_MAX, bad_wall_here = UINT32_MAX;
+  double* target = acc;
+  if (atomic) {
+#pragma omp for schedule(static)
+    for (std::size_t a = 0; a < kAccStride * n; ++a) acc[a] = 0.0;
+  } else {
+    thread_acc[t].assign(kAccStride * n, 0.0);  // the report's cost: one array per thread
+    target = thread_acc[t].data();
+  }
+  PairBlock blk(scratch);
+  const std::size_t blocks = (n + kRowsPerBlock - 1) / kRowsPerBlock;
+#pragma omp for schedule(runtime) nowait
+  for (std::size_t block = 0; block < blocks; ++block) {
+    const std::size_t first = block * kRowsPerBlock, last = std::min(n, first + kRowsPerBlock);
+    const std::size_t k0 = q.rows[first], k1 = q.rows[last];
+    blk.reserve(k1 - k0);
+    pack_rows<kRolling>(kin, q, first, last, blk, target);
+    pair_law<kRolling, kClamp>(q, c, dt, k0, k1, blk);
+    if (atomic) {
+      accumulate_shared<kRolling, true>(kin, q, first, last, blk, target, large_here, bad_here);
+    } else {
+      accumulate_shared<kRolling, false>(kin, q, first, last, blk, target, large_here, bad_here);
+    }
+  }
+#pragma omp barrier
+  pairs_done();
+  if (!atomic) {  // the reduction, in thread order
+#pragma omp for schedule(static)
+    for (std::size_t a = 0; a < kAccStride * n; ++a) {
+      double sum = thread_acc[0][a];
+      for (std::size_t u = 1; u < threads; ++u) sum += thread_acc[u][a];
+      acc[a] = sum;
+    }
+  }
+  if (serial_walls) {
+#pragma omp single
+    for (std::size_t a = 0; a < n; ++a) walls(a, large_here, bad_wall_here);
+  }
+#pragma omp for schedule(runtime)
+  for (std::size_t a = 0; a < n; ++a) finish(a, !serial_walls, large_here, bad_wall_here);
+  combine_counts(large_here, bad_here, large, bad_pair);
+  combine_counts(0, bad_wall_here, large, bad_wall);
+}
+
+}  // namespace contactlab::dem::detail

@@ -1,0 +1,271 @@
+// The DEM pair kernels (private to src/): the tangential history law, and a block of the half
+// neighbour list packed field by field and put through the contact law on SIMD lanes.
+#pragma once
+
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+#include "contactlab/dem/contact_law.hpp"
+#include "contactlab/dem/pair_list.hpp"
+
+namespace contactlab::dem::detail {
+
+// Overlap thresholds, as fractions of the smaller radius: 1 % and 10 % of the diameter.
+constexpr double kWarnFraction = 0.02, kFailFraction = 0.2;
+
+// What the pair pass reads of a particle, side by side (one or two cache lines per particle
+// instead of one per array): x, y, z, r, pvx, pvy, pvz, m, pwx, pwy, pwz, unused.
+constexpr std::size_t kKinStride = 12;
+// Per particle, kAccStride doubles, summed in pair order by the force pass: force [N],
+// torque [N m], touching contacts.
+constexpr std::size_t kAccStride = 8;
+// How many pairs ahead the pack loop prefetches its partner's data.
+constexpr std::size_t kPartnerAhead = 8;
+// Rows per block of the pair pass: enough pairs (about 4 a row) for full SIMD lanes, few enough
+// that a block's outputs are still in L1 when their particles are gathered.
+constexpr std::size_t kRowsPerBlock = 64;
+
+// The tangential part of the law for one contact (pair or wall), LAMMPS gran/hooke/history
+// with the stored spring projected first: xi <- xi - (xi.n) n; xi += v_t dt; F_t = -k_t xi -
+// c_t v_t; at |F_t| > mu F_n: F_t scaled to mu F_n and xi = -(F_t + c_t v_t) / k_t.
+struct Tangential {
+  double ftx, fty, ftz;
+};
+
+inline Tangential tangential(double nx, double ny, double nz, double vtx, double vty, double vtz,
+                             double fn, double kt, double ct, double mu, double dt, double& hx,
+                             double& hy, double& hz) {
+  const double hn = hx * nx + hy * ny + hz * nz;
+  hx += vtx * dt - hn * nx;
+  hy += vty * dt - hn * ny;
+  hz += vtz * dt - hn * nz;
+  double ftx = -kt * hx - ct * vtx, fty = -kt * hy - ct * vty, ftz = -kt * hz - ct * vtz;
+  const double ft_sq = ftx * ftx + fty * fty + ftz * ftz;
+  const double limit = mu * fn;
+  // Branch-free (the pair pass runs this on SIMD lanes): both quotients are computed and the
+  // unused one (possibly inf or NaN) is dropped by the selects; slipping implies ft_sq > 0.
+  const bool slip = ft_sq > limit * limit;
+  const double slip_scale = limit / std::sqrt(ft_sq), kt_inverse = 1.0 / kt;
+  const double scale = slip ? slip_scale : 1.0;
+  ftx *= scale;
+  fty *= scale;
+  ftz *= scale;
+  const double inv_kt = kt > 0 ? kt_inverse : 0.0;
+  hx = slip ? -(ftx + ct * vtx) * inv_kt : hx;
+  hy = slip ? -(fty + ct * vty) * inv_kt : hy;
+  hz = slip ? -(ftz + ct * vtz) * inv_kt : hz;
+  return {ftx, fty, ftz};
+}
+
+// One block of pairs, field by field (contiguous, so the law runs on SIMD lanes with plain
+// vector loads and stores, no gathers): the inputs the pack loop derives from the two
+// particles' kin blocks, and the outputs the law writes.
+struct PairBlock {
+  enum Input {
+    kDx,
+    kDy,
+    kDz,
+    kRr,
+    kRmin,
+    kMi,
+    kMj,
+    kDvx,
+    kDvy,
+    kDvz,
+    kSx,
+    kSy,
+    kSz,
+    kDwx,
+    kDwy,
+    kDwz,
+    kRprod,
+    kInputs
+  };
+  // Force on i [N], n x F_t [N], 1 if touching with a force, rolling torque on i [N m], 1 if
+  // the overlap is above 1 % / 10 % (flags, not SIMD reductions: those cost a memset a block).
+  enum Output {
+    kFx,
+    kFy,
+    kFz,
+    kCx,
+    kCy,
+    kCz,
+    kTouch,
+    kRollX,
+    kRollY,
+    kRollZ,
+    kLarge,
+    kFailing,
+    kOutputs
+  };
+  // The storage is the calling thread's, kept by the engine from step to step (a fresh
+  // buffer each step costs page faults and zeroing).
+  explicit PairBlock(std::vector<double>& storage) : data(storage) {}
+  std::size_t capacity = 0;
+  std::vector<double>& data;
+
+  static constexpr std::size_t kFields = std::size_t{kInputs} + kOutputs;
+  // Room for `pairs` pairs (the storage only grows; the field stride is its whole length).
+  void reserve(std::size_t pairs) {
+    capacity = std::max(pairs, data.size() / kFields);
+    data.resize(kFields * capacity);
+  }
+  double* in(Input f) { return data.data() + f * capacity; }
+  double* out(Output f) { return data.data() + (std::size_t{kInputs} + f) * capacity; }
+};
+
+// Pack: the rows [first, last) (pairs [rows[first], rows[last])), i's values in registers,
+// j's from its kin block, into the block's inputs (the same operations, in the same order, as
+// the law on whole particles, so nothing is rounded differently).
+template <bool kRolling>
+inline void pack_rows(const double* kin, const PairList& q, std::size_t first, std::size_t last,
+                      PairBlock& blk, double* acc) {
+  const std::size_t k0 = q.rows[first];
+  double* dx = blk.in(PairBlock::kDx);
+  double* dy = blk.in(PairBlock::kDy);
+  double* dz = blk.in(PairBlock::kDz);
+  double* rr = blk.in(PairBlock::kRr);
+  double* rmin = blk.in(PairBlock::kRmin);
+  double* mi = blk.in(PairBlock::kMi);
+  double* mj = blk.in(PairBlock::kMj);
+  double* dvx = blk.in(PairBlock::kDvx);
+  double* dvy = blk.in(PairBlock::kDvy);
+  double* dvz = blk.in(PairBlock::kDvz);
+  double* sx = blk.in(PairBlock::kSx);
+  double* sy = blk.in(PairBlock::kSy);
+  double* sz = blk.in(PairBlock::kSz);
+  for (std::size_t i = first; i < last; ++i) {
+    const double* ki = kin + kKinStride * i;
+    const double xi = ki[0], yi = ki[1], zi = ki[2], ri = ki[3], vxi = ki[4], vyi = ki[5],
+                 vzi = ki[6], m = ki[7], wxi = ki[8], wyi = ki[9], wzi = ki[10];
+    for (std::size_t k = q.rows[i]; k < q.rows[i + 1]; ++k) {
+      // Partners lie up to max_span particles back (L2 or beyond, out of reach of the hardware
+      // prefetcher): fetch the kin block and the sums of the partner a few pairs ahead.
+      if (k + kPartnerAhead < q.j.size()) {
+        const std::size_t ahead = q.j[k + kPartnerAhead];
+        __builtin_prefetch(kin + kKinStride * ahead);
+        __builtin_prefetch(kin + kKinStride * ahead + kKinStride - 1);
+        __builtin_prefetch(acc + kAccStride * ahead, 1);
+      }
+      const double* kj = kin + kKinStride * q.j[k];
+      const auto& sh = q.shift[q.image[k]];
+      const std::size_t b = k - k0;
+      const double rj = kj[3];
+      dx[b] = xi - kj[0] - sh[0];
+      dy[b] = yi - kj[1] - sh[1];
+      dz[b] = zi - kj[2] - sh[2];
+      rr[b] = ri + rj;
+      rmin[b] = rj < ri ? rj : ri;
+      mi[b] = m;
+      mj[b] = kj[7];
+      dvx[b] = vxi - kj[4];
+      dvy[b] = vyi - kj[5];
+      dvz[b] = vzi - kj[6];
+      sx[b] = ri * wxi + rj * kj[8];
+      sy[b] = ri * wyi + rj * kj[9];
+      sz[b] = ri * wzi + rj * kj[10];
+      if constexpr (kRolling) {
+        blk.in(PairBlock::kDwx)[b] = wxi - kj[8];
+        blk.in(PairBlock::kDwy)[b] = wyi - kj[9];
+        blk.in(PairBlock::kDwz)[b] = wzi - kj[10];
+        blk.in(PairBlock::kRprod)[b] = ri * rj;
+      }
+    }
+  }
+}
+
+// The law on the packed pairs [k0, k1), each independent of the others, on SIMD lanes (masks
+// instead of branches): outputs zero while apart, springs updated in place. With
+// -ffp-contract=off a lane computes exactly what scalar code would, so where a block boundary
+// falls (it moves with the thread count) changes no bit. Overlaps above 1 % are counted into
+// `large`, the first above 10 % goes to `bad` (both exact).
+template <bool kRolling, bool kClamp>
+inline void pair_law(PairList& q, const PairCoefficients& c, double dt, std::size_t k0,
+                     std::size_t k1, PairBlock& blk) {
+  const double* __restrict dx = blk.in(PairBlock::kDx);
+  const double* __restrict dy = blk.in(PairBlock::kDy);
+  const double* __restrict dz = blk.in(PairBlock::kDz);
+  const double* __restrict rr_in = blk.in(PairBlock::kRr);
+  const double* __restrict rmin = blk.in(PairBlock::kRmin);
+  const double* __restrict mi = blk.in(PairBlock::kMi);
+  const double* __restrict mj = blk.in(PairBlock::kMj);
+  const double* __restrict dvx = blk.in(PairBlock::kDvx);
+  const double* __restrict dvy = blk.in(PairBlock::kDvy);
+  const double* __restrict dvz = blk.in(PairBlock::kDvz);
+  const double* __restrict sx_in = blk.in(PairBlock::kSx);
+  const double* __restrict sy_in = blk.in(PairBlock::kSy);
+  const double* __restrict sz_in = blk.in(PairBlock::kSz);
+  const double* __restrict dwx = blk.in(PairBlock::kDwx);
+  const double* __restrict dwy = blk.in(PairBlock::kDwy);
+  const double* __restrict dwz = blk.in(PairBlock::kDwz);
+  const double* __restrict rprod = blk.in(PairBlock::kRprod);
+  double* __restrict out_fx = blk.out(PairBlock::kFx);
+  double* __restrict out_fy = blk.out(PairBlock::kFy);
+  double* __restrict out_fz = blk.out(PairBlock::kFz);
+  double* __restrict out_cx = blk.out(PairBlock::kCx);
+  double* __restrict out_cy = blk.out(PairBlock::kCy);
+  double* __restrict out_cz = blk.out(PairBlock::kCz);
+  double* __restrict out_touch = blk.out(PairBlock::kTouch);
+  double* __restrict roll_x = blk.out(PairBlock::kRollX);
+  double* __restrict roll_y = blk.out(PairBlock::kRollY);
+  double* __restrict roll_z = blk.out(PairBlock::kRollZ);
+  double* __restrict hx = q.hx.data() + k0;
+  double* __restrict hy = q.hy.data() + k0;
+  double* __restrict hz = q.hz.data() + k0;
+  const double k_abs = c.k_abs, k_per_mass = c.k_per_mass, c_per_mass = c.c_per_mass;
+  const double kt_ratio = c.kt_ratio, ct_ratio = c.ct_ratio, mu = c.mu, mu_roll = c.mu_roll;
+  double* __restrict out_large = blk.out(PairBlock::kLarge);
+  double* __restrict out_failing = blk.out(PairBlock::kFailing);
+  const auto count = static_cast<std::uint32_t>(k1 - k0);
+#pragma omp simd
+  for (std::uint32_t b = 0; b < count; ++b) {
+    const double rr = rr_in[b];
+    const double rsq = dx[b] * dx[b] + dy[b] * dy[b] + dz[b] * dz[b];
+    const bool touch = rsq < rr * rr;
+    const double dist = std::sqrt(rsq), inv = 1.0 / dist;
+    const double nx = dx[b] * inv, ny = dy[b] * inv, nz = dz[b] * inv;
+    const double delta = rr - dist;
+    out_large[b] = touch & (delta > kWarnFraction * rmin[b]) ? 1.0 : 0.0;
+    out_failing[b] = touch & (delta > kFailFraction * rmin[b]) ? 1.0 : 0.0;
+    const double m_star = mi[b] * mj[b] / (mi[b] + mj[b]);
+    // Relative velocity of the contact point: v_i - v_j - (r_i w_i + r_j w_j) x n.
+    const double sx = sx_in[b], sy = sy_in[b], sz = sz_in[b];
+    const double vx = dvx[b] - (sy * nz - sz * ny);
+    const double vy = dvy[b] - (sz * nx - sx * nz);
+    const double vz = dvz[b] - (sx * ny - sy * nx);
+    const double vn = vx * nx + vy * ny + vz * nz;
+    const double kn = k_abs + k_per_mass * m_star, cn = c_per_mass * m_star;
+    double fn = kn * delta - cn * vn;
+    if constexpr (kClamp) fn = fn < 0.0 ? 0.0 : fn;  // std::max(fn, 0.0)
+    double sxk = hx[b], syk = hy[b], szk = hz[b];
+    const Tangential ft = tangential(nx, ny, nz, vx - vn * nx, vy - vn * ny, vz - vn * nz, fn,
+                                     kt_ratio * kn, ct_ratio * cn, mu, dt, sxk, syk, szk);
+    hx[b] = touch ? sxk : 0.0;
+    hy[b] = touch ? syk : 0.0;
+    hz[b] = touch ? szk : 0.0;
+    const double fpx = fn * nx + ft.ftx, fpy = fn * ny + ft.fty, fpz = fn * nz + ft.ftz;
+    out_fx[b] = touch ? fpx : 0.0;
+    out_fy[b] = touch ? fpy : 0.0;
+    out_fz[b] = touch ? fpz : 0.0;
+    out_cx[b] = touch ? ny * ft.ftz - nz * ft.fty : 0.0;
+    out_cy[b] = touch ? nz * ft.ftx - nx * ft.ftz : 0.0;
+    out_cz[b] = touch ? nx * ft.fty - ny * ft.ftx : 0.0;
+    // A contact with a zero force (e.g. the clamp) does not count as touching.
+    out_touch[b] = touch & ((fpx != 0.0) | (fpy != 0.0) | (fpz != 0.0)) ? 1.0 : 0.0;
+    if constexpr (kRolling) {
+      // Constant rolling-resistance torque against the relative rotation (model A).
+      const double ox = dwx[b], oy = dwy[b], oz = dwz[b];
+      const double om = std::sqrt(ox * ox + oy * oy + oz * oz);
+      const double s_any = -mu_roll * fn * (rprod[b] / rr) / om;  // dropped where om = 0
+      const double s = om > 0 ? s_any : 0.0;
+      roll_x[b] = touch ? s * ox : 0.0;
+      roll_y[b] = touch ? s * oy : 0.0;
+      roll_z[b] = touch ? s * oz : 0.0;
+    }
+  }
+}
+
+}  // namespace contactlab::dem::detail
