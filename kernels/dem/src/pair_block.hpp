@@ -2,7 +2,6 @@
 // neighbour list packed field by field and put through the contact law on SIMD lanes.
 #pragma once
 
-
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
