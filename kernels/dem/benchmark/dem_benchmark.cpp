@@ -1,6 +1,6 @@
 // Google Benchmark of DEM steps on a settled bed: particle-steps per second per thread count,
-// and the phase split (neighbour list, pair forces, walls + gather + kick, integration) from
-// the split force pass.
+// and the phase split (neighbour list, pair forces, reduction, update, integration) from the
+// split force pass.
 //
 // The bed is the checkpoint of experiments/dem/settle-bed.json when CONTACTLAB_DEM_BENCH_CONFIG
 // and CONTACTLAB_DEM_BENCH_CHECKPOINT name them; otherwise a small bed of
@@ -106,15 +106,13 @@ void run_steps(benchmark::State& state, bool fused) {
   const double n = static_cast<double>(engine->particles().size());
   state.counters["particle_steps_per_s"] =
       benchmark::Counter(n * static_cast<double>(steps), benchmark::Counter::kIsRate);
-  const double neighbor = after.neighbor_s - before.neighbor_s;
-  const double pairs = after.pair_forces_s - before.pair_forces_s;
-  const double walls = after.walls_gather_s - before.walls_gather_s;
-  const double integrate = after.integrate_s - before.integrate_s;
-  const double total = neighbor + pairs + walls + integrate;
-  state.counters["share_neighbor"] = neighbor / total;
-  state.counters["share_pair_forces"] = pairs / total;
-  state.counters["share_walls_gather_kick"] = walls / total;
-  state.counters["share_integration"] = integrate / total;
+  const double total = after.total_s() - before.total_s();
+  state.counters["share_neighbor"] = (after.neighbor_s - before.neighbor_s) / total;
+  state.counters["share_pair_forces"] = (after.pair_forces_s - before.pair_forces_s) / total;
+  state.counters["share_reduction"] = (after.reduction_s - before.reduction_s) / total;
+  state.counters["share_update"] =
+      (after.walls_s + after.update_s - before.walls_s - before.update_s) / total;
+  state.counters["share_integration"] = (after.integrate_s - before.integrate_s) / total;
   std::uint64_t touching = 0;  // pair and wall contacts with a force, each counted per particle
   for (const auto t : engine->particles().contacts) touching += t;
   state.counters["contacts_per_particle"] = static_cast<double>(touching) / n;

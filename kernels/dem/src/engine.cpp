@@ -206,7 +206,6 @@ void Engine::compute_forces(bool final_kick) {
   std::uint64_t large = 0;  // overlaps above 1 %: the threads add exactly (integers)
   std::uint32_t bad_pair = UINT32_MAX, bad_wall_particle = UINT32_MAX;
   const double t0 = omp_get_wtime();
-  double t_pairs = 0.0;
   acc_.resize(detail::kAccStride * n);
   if (block_scratch_.size() < static_cast<std::size_t>(settings_.threads)) {
     block_scratch_.resize(static_cast<std::size_t>(settings_.threads));
@@ -334,8 +333,10 @@ void Engine::compute_forces(bool final_kick) {
     }
   };
   const double* kin = kin_.data();
-  auto pairs_done = [&] {
-    if (omp_get_thread_num() == 0) t_pairs = omp_get_wtime();
+  // Phase ends as thread 0 sees them (after barriers, so the same for all threads).
+  double phase_end[3] = {-1.0, -1.0, -1.0};
+  auto mark = [&](detail::Phase phase) {
+    if (omp_get_thread_num() == 0) phase_end[static_cast<int>(phase)] = omp_get_wtime();
   };
   // The law's switches chosen at compile time.
   const ForceVariant& variant = settings_.force_variant;
@@ -356,11 +357,11 @@ void Engine::compute_forces(bool final_kick) {
       if (ordered) {
         detail::force_pass<kRolling, kClamp>(kin, n, q, c, dt, !variant.separate_update,
                                              variant.serial_walls, acc, scratch, finish, walls,
-                                             pairs_done, large, bad_pair, bad_wall_particle);
+                                             mark, large, bad_pair, bad_wall_particle);
       } else {
         detail::force_pass_shared<kRolling, kClamp>(kin, n, q, c, dt, atomic, variant.serial_walls,
-                                                    acc, thread_acc_, scratch, finish, walls,
-                                                    pairs_done, large, bad_pair, bad_wall_particle);
+                                                    acc, thread_acc_, scratch, finish, walls, mark,
+                                                    large, bad_pair, bad_wall_particle);
       }
     }
   };
@@ -370,11 +371,16 @@ void Engine::compute_forces(bool final_kick) {
     c.clamp ? passes.template operator()<false, true>()
             : passes.template operator()<false, false>();
   }
+  const double t_end = omp_get_wtime();
   // The fused ordered pass finishes particles among the pairs: all of it counts as pair forces.
-  if (ordered && !variant.separate_update) t_pairs = omp_get_wtime();
-  const double t2 = omp_get_wtime();
+  if (ordered && !variant.separate_update) phase_end[0] = phase_end[1] = phase_end[2] = t_end;
+  const double t_pairs = phase_end[0];
+  const double t_reduced = phase_end[1] < 0 ? t_pairs : phase_end[1];
+  const double t_walls = phase_end[2] < 0 ? t_reduced : phase_end[2];
   phases_.pair_forces_s += t_pairs - t0;
-  phases_.walls_gather_s += t2 - t_pairs;
+  phases_.reduction_s += t_reduced - t_pairs;
+  phases_.walls_s += t_walls - t_reduced;
+  phases_.update_s += t_end - t_walls;
   if (bad_pair != UINT32_MAX) check_pair_overlap(bad_pair);
   if (bad_wall_particle != UINT32_MAX) {
     fail("overlap with a wall above 10 % of the diameter", bad_wall_particle);

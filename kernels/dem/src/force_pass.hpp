@@ -13,6 +13,10 @@
 
 namespace contactlab::dem::detail {
 
+// Where the force pass's phases end (for PhaseTimes): the pairs, the reduction (ordered: the
+// j sides other threads left; per-thread: the arrays' sum), the serial walls.
+enum class Phase { kPairs, kReduction, kWalls };
+
 // Combines a thread's overlap counts into the shared ones (integers: exact in any order).
 inline void combine_counts(std::uint64_t here, std::uint32_t bad_here, std::uint64_t& total,
                            std::uint32_t& bad) {
@@ -116,13 +120,14 @@ inline void accumulate_deferred(const double* kin, const PairList& q, std::size_
 // walls(a, ...) adds them for every particle in one thread first; gravity, kick) as soon
 // as the rows holding its j sides, (a, a + lag], are done; lag = max_span finishes particles
 // while their sums are still in cache (fused), lag = n finishes every particle after the
-// barrier (split: the pair phase timed alone; `pairs_done` is called once then). The last
+// barrier (split: the pair phase timed alone). mark(phase) is called by every thread where a
+// phase ends (after the pairs, the j sides from other threads, the serial walls). The last
 // max_span particles of a range wait for the next range's rows, after a barrier. A particle's
 // sums do not depend on when it is finished, so the result is the same for any thread count.
-template <bool kRolling, bool kClamp, class Finish, class Walls, class PairsDone>
+template <bool kRolling, bool kClamp, class Finish, class Walls, class Mark>
 void force_pass(const double* kin, std::size_t n, PairList& q, const PairCoefficients& c, double dt,
                 bool fused, bool serial_walls, double* acc, std::vector<double>& scratch,
-                Finish& finish, Walls& walls, PairsDone& pairs_done, std::uint64_t& large,
+                Finish& finish, Walls& walls, Mark& mark, std::uint64_t& large,
                 std::uint32_t& bad_pair, std::uint32_t& bad_wall) {
   const auto t = static_cast<std::size_t>(omp_get_thread_num());
   const auto threads = static_cast<std::size_t>(omp_get_num_threads());
@@ -143,14 +148,16 @@ void force_pass(const double* kin, std::size_t n, PairList& q, const PairCoeffic
     for (; next + lag < last; ++next) finish(next, true, large_here, bad_wall_here);
   }
 #pragma omp barrier
-  pairs_done();
+  mark(Phase::kPairs);
   for (std::size_t a = std::max(next, e > q.max_span ? e - q.max_span : 0); a < e; ++a) {
     accumulate_deferred<kRolling>(kin, q, a, e, acc);
   }
+  mark(Phase::kReduction);
   if (serial_walls) {  // every particle's pairs are in (fused is off: no one finished yet)
 #pragma omp barrier
 #pragma omp single
     for (std::size_t a = 0; a < n; ++a) walls(a, large_here, bad_wall_here);
+    mark(Phase::kWalls);
   }
   for (; next < e; ++next) finish(next, !serial_walls, large_here, bad_wall_here);
   combine_counts(large_here, bad_here, large, bad_pair);
@@ -212,11 +219,11 @@ inline void accumulate_shared(const double* kin, const PairList& q, std::size_t 
 // shared out by the variant's schedule (`omp for schedule(runtime)`: the caller sets it), then
 // the per-thread arrays summed in thread order, the walls by one thread when serial_walls, and
 // the update (finish(a, with_walls, ...)) shared out by the same schedule.
-template <bool kRolling, bool kClamp, class Finish, class Walls, class PairsDone>
+template <bool kRolling, bool kClamp, class Finish, class Walls, class Mark>
 void force_pass_shared(const double* kin, std::size_t n, PairList& q, const PairCoefficients& c,
                        double dt, bool atomic, bool serial_walls, double* acc,
                        std::vector<std::vector<double>>& thread_acc, std::vector<double>& scratch,
-                       Finish& finish, Walls& walls, PairsDone& pairs_done, std::uint64_t& large,
+                       Finish& finish, Walls& walls, Mark& mark, std::uint64_t& large,
                        std::uint32_t& bad_pair, std::uint32_t& bad_wall) {
   const auto t = static_cast<std::size_t>(omp_get_thread_num());
   const auto threads = static_cast<std::size_t>(omp_get_num_threads());
@@ -246,7 +253,7 @@ void force_pass_shared(const double* kin, std::size_t n, PairList& q, const Pair
     }
   }
 #pragma omp barrier
-  pairs_done();
+  mark(Phase::kPairs);
   if (!atomic) {  // the reduction, in thread order
 #pragma omp for schedule(static)
     for (std::size_t a = 0; a < kAccStride * n; ++a) {
@@ -255,9 +262,11 @@ void force_pass_shared(const double* kin, std::size_t n, PairList& q, const Pair
       acc[a] = sum;
     }
   }
+  mark(Phase::kReduction);
   if (serial_walls) {
 #pragma omp single
     for (std::size_t a = 0; a < n; ++a) walls(a, large_here, bad_wall_here);
+    mark(Phase::kWalls);
   }
 #pragma omp for schedule(runtime)
   for (std::size_t a = 0; a < n; ++a) finish(a, !serial_walls, large_here, bad_wall_here);

@@ -43,10 +43,18 @@ struct EngineSettings {
   ForceVariant force_variant;
 };
 
-// Phase times of step() [s], summed since construction. With the fused force pass the pair
-// forces, gather, walls and kick are one phase, counted in pair_forces_s.
+// Phase times of step() [s], summed since construction: the neighbour list (candidates; a
+// rebuild runs on one thread: its order must not depend on the thread count), the
+// pair forces, the reduction (the j sides other threads left, or the per-thread arrays' sum),
+// the walls when one thread does them (walls=serial), the update (walls when parallel,
+// gravity, kick), the integration (half kick, drift, checks). With the fused ordered pass
+// (the default) the pairs, reduction and update are one phase, counted in pair_forces_s.
 struct PhaseTimes {
-  double neighbor_s = 0.0, pair_forces_s = 0.0, walls_gather_s = 0.0, integrate_s = 0.0;
+  double neighbor_s = 0.0, pair_forces_s = 0.0, reduction_s = 0.0, walls_s = 0.0, update_s = 0.0,
+         integrate_s = 0.0;
+  double total_s() const {
+    return neighbor_s + pair_forces_s + reduction_s + walls_s + update_s + integrate_s;
+  }
 };
 
 struct Energies {
