@@ -53,11 +53,7 @@ TEST(DemPicture, HeightBandsHaveEqualCounts) {
 }
 
 TEST(DemPicture, SectionAndDischargePlotAreValidPngs) {
-  auto [settings, particles] = test::small_bed();
-  Wall gate;
-  gate.name = "gate";
-  gate.point = {0, 0, 0.001};
-  settings.walls.push_back(gate);
+  auto [settings, particles] = test::small_bed();  // its floor is drawn as a gate (dashed)
   SectionView view = section_view_for(settings, particles);
   view.plot_width_px = 300;
   EXPECT_DOUBLE_EQ(view.axis_y, 0.005);
