@@ -14,7 +14,7 @@
 namespace contactlab::dem {
 namespace {
 
-// Version 2 added the sink's counters; particles may be fewer than the config's (removed).
+// Format 2 added the sink's counters; particles may be fewer than the config's (removed).
 constexpr char kMagic[8] = {'C', 'L', 'D', 'E', 'M', 'C', 'K', '2'};
 
 template <class T>
@@ -89,7 +89,9 @@ int read_checkpoint(Engine& engine, const std::string& path) {
   if (!file) throw InputError("cannot open checkpoint '" + path + "'");
   char magic[8];
   file.read(magic, sizeof magic);
-  if (!file || std::memcmp(magic, kMagic, sizeof magic) != 0) {
+  // Format 1 (before the sink) is read too: it has no sink counters (zero).
+  const bool version1 = file && std::memcmp(magic, kMagic, 7) == 0 && magic[7] == '1';
+  if (!file || (!version1 && std::memcmp(magic, kMagic, sizeof magic) != 0)) {
     throw InputError(path + ": not a contactlab DEM checkpoint");
   }
   Reader in(file, path);
@@ -110,8 +112,10 @@ int read_checkpoint(Engine& engine, const std::string& path) {
   s.rebuilds = in.get<std::uint64_t>();
   s.large_overlaps = in.get<std::uint64_t>();
   s.initial_energy = in.get<double>();
-  s.removed_count = in.get<std::uint64_t>();
-  s.removed_mass = in.get<double>();
+  if (!version1) {
+    s.removed_count = in.get<std::uint64_t>();
+    s.removed_mass = in.get<double>();
+  }
   Particles p = engine.particles();
   p.for_each_array([&](auto& v) { in.array(v, n); });
   std::vector<std::uint8_t> seen(engine.id_capacity(), 0);
