@@ -135,6 +135,23 @@ TEST(DemCli, HopperWritesDischargeSeriesAndStopsAfterSteps) {
   EXPECT_EQ(std::count(longer.begin(), longer.end(), '\n'), 5) << longer;
 }
 
+TEST(DemCli, RunStopsWhenEveryParticleHasLeft) {
+  TempDir dir;
+  std::string text = slurp(tiny_hopper(dir));
+  const std::string key = "\"below\": -0.002";
+  text.replace(text.find(key), key.size(), "\"below\": 1.0");  // above every particle
+  const std::string config = dir.file("all-out.json");
+  std::ofstream(config) << text;
+  const auto r = run_command(contactlab_exe() + " dem run " + config + " --threads 1 --discharge " +
+                             dir.file("d.csv"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("every particle has left through the sink"), std::string::npos)
+      << r.output;
+  EXPECT_NE(r.output.find("150 particles, 0 left"), std::string::npos) << r.output;
+  const std::string csv = slurp(dir.file("d.csv"));
+  EXPECT_NE(csv.find(",150,0\n"), std::string::npos) << csv;
+}
+
 TEST(DemCli, PngSectionsAndDischargePlot) {
   TempDir dir;
   const auto r = run_command(contactlab_exe() + " dem run " + tiny_hopper(dir) +
