@@ -122,11 +122,12 @@ void draw_axes(const Canvas& c, const Frame& f, double scale, const std::string&
   const double sx = nice_step(f.x1 - f.x0, 6), sy = nice_step(f.y1 - f.y0, 6);
   for (double x = std::ceil(f.x0 / sx) * sx; x <= f.x1 + 1e-9 * sx; x += sx) {
     c.line(f.px(x), f.py1, f.px(x), f.py1 + 5);
-    c.text(f.px(x), f.py1 + 18, fmt::format("{:g}", std::round(x * scale * 1e6) / 1e6), 0.5);
+    c.text(f.px(x), f.py1 + 18, fmt::format("{:g}", std::round(x * scale * 1e6) / 1e6 + 0.0), 0.5);
   }
   for (double y = std::ceil(f.y0 / sy) * sy; y <= f.y1 + 1e-9 * sy; y += sy) {
     c.line(f.px0 - 5, f.py(y), f.px0, f.py(y));
-    c.text(f.px0 - 8, f.py(y) + 4, fmt::format("{:g}", std::round(y * scale * 1e6) / 1e6), 1.0);
+    c.text(f.px0 - 8, f.py(y) + 4, fmt::format("{:g}", std::round(y * scale * 1e6) / 1e6 + 0.0),
+           1.0);
   }
   c.text(0.5 * (f.px0 + f.px1), f.py1 + 38, x_label, 0.5);
   cairo_save(cr);
