@@ -5,6 +5,8 @@
 
 #include <cmath>
 #include <cstring>
+#include <fstream>
+#include <iterator>
 #include <string>
 #include <vector>
 
@@ -109,6 +111,30 @@ TEST(DemSink, CheckpointAfterRemovalsRestartsBitIdentically) {
   EXPECT_EQ(restarted.removed_mass(), whole.removed_mass());
   EXPECT_TRUE(test::bitwise_equal(state_by_sparse_id(restarted), state_by_sparse_id(whole)));
   EXPECT_EQ(restarted.energies().dissipated, whole.energies().dissipated);
+}
+
+// Checkpoints written before the sink existed (format 1: no sink counters) are still read.
+TEST(DemSink, FormatOneCheckpointsAreStillRead) {
+  auto [settings, particles] = test::small_bed();
+  Engine original(settings, particles);
+  original.run_steps(300);
+  const std::string v2 = ::testing::TempDir() + "dem_sink_v2.chk";
+  const std::string v1 = ::testing::TempDir() + "dem_sink_v1.chk";
+  write_checkpoint(original, 1, v2);
+  std::ifstream in(v2, std::ios::binary);
+  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  // Magic (8), three counts (24), frames (4), time, step, rebuilds, overlaps, energy (40):
+  // the sink's two counters follow at byte 76.
+  bytes[7] = '1';
+  bytes.erase(76, 16);
+  std::ofstream(v1, std::ios::binary) << bytes;
+  Engine restored(settings, particles);
+  EXPECT_EQ(read_checkpoint(restored, v1), 1);
+  EXPECT_EQ(restored.step_count(), original.step_count());
+  EXPECT_EQ(restored.removed_count(), 0u);
+  original.run_steps(200);
+  restored.run_steps(200);
+  EXPECT_TRUE(test::bitwise_equal(state_by_sparse_id(restored), state_by_sparse_id(original)));
 }
 
 TEST(DemSink, ARunWithoutParticlesGoesOn) {
