@@ -1,10 +1,12 @@
 // `contactlab dem run|validate|timestep|variants|profile`: DEM runs from a JSON config (VTK
-// frames, energy CSV, checkpoints), the validation cases as a table, the time-step study, the
-// force variants' speed against error, and the report's profile (phases, Amdahl).
+// frames, energy CSV, discharge CSV, section pictures, checkpoints), the validation cases as a
+// table, the time-step study, the force variants' speed against error, and the report's
+// profile (phases, Amdahl).
 #include <fmt/core.h>
 #include <omp.h>
 
 #include <cmath>
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -12,7 +14,11 @@
 #include "cli_shared.hpp"
 #include "contactlab/dem/checkpoint.hpp"
 #include "contactlab/dem/config.hpp"
+#include "contactlab/dem/discharge.hpp"
 #include "contactlab/dem/output.hpp"
+#ifdef CONTACTLAB_HAVE_CAIRO
+#include "contactlab/dem/picture.hpp"
+#endif
 #include "contactlab/dem/timestep_study.hpp"
 #include "contactlab/dem/validation.hpp"
 #include "contactlab/dem/variant_study.hpp"
@@ -30,8 +36,16 @@ struct DemRunCommand {
   int threads_ = 0;
   std::string variant_;
   std::string vtk_dir_;
+  std::string png_dir_;
+  std::string discharge_;
   std::string restart_;
   std::string checkpoint_;
+  std::uint64_t steps_ = 0;
+
+  static std::string in_dir(std::string dir, const std::string& file) {
+    if (!dir.empty() && dir.back() != '/') dir += '/';
+    return dir + file;
+  }
 
   int run() const {
     const dem::DemConfig config = dem::read_dem_config(config_);
@@ -39,25 +53,48 @@ struct DemRunCommand {
     settings.threads = resolve_threads(threads_);
     if (settings.threads < 1) throw InputError("--threads must be >= 0");
     if (!variant_.empty()) settings.force_variant = dem::parse_force_variant(variant_);
+    const bool has_sink = settings.sink_below_z > -std::numeric_limits<double>::infinity();
     // Output paths are checked before any work.
     std::unique_ptr<dem::FrameWriter> writer;
     if (!vtk_dir_.empty()) writer = std::make_unique<dem::FrameWriter>(vtk_dir_, config.name);
-    std::string checkpoint = checkpoint_;
-    if (checkpoint.empty() && !vtk_dir_.empty()) {
-      checkpoint = vtk_dir_ + (vtk_dir_.back() == '/' ? "" : "/") + "last.chk";
+    dem::Particles initial = dem::make_particles(config);
+#ifdef CONTACTLAB_HAVE_CAIRO
+    std::unique_ptr<dem::SectionPainter> painter;
+    if (!png_dir_.empty()) {
+      painter = std::make_unique<dem::SectionPainter>(
+          png_dir_, config.name, dem::section_view_for(settings, initial),
+          dem::height_layers(initial, dem::SectionView{}.layers));
     }
+#else
+    if (!png_dir_.empty()) {
+      throw InputError(
+          "--png: this contactlab was built without cairo (install libcairo2-dev "
+          "and rebuild)");
+    }
+#endif
+    std::string discharge = discharge_;
+    if (discharge.empty() && has_sink && (!vtk_dir_.empty() || !png_dir_.empty())) {
+      discharge = in_dir(vtk_dir_.empty() ? png_dir_ : vtk_dir_, config.name + "_discharge.csv");
+    }
+    std::unique_ptr<dem::DischargeLog> log;
+    if (!discharge.empty()) log = std::make_unique<dem::DischargeLog>(discharge);
+    std::string checkpoint = checkpoint_;
+    if (checkpoint.empty() && !vtk_dir_.empty()) checkpoint = in_dir(vtk_dir_, "last.chk");
     if (!checkpoint.empty()) check_writable(checkpoint);
-    dem::Engine engine(settings, dem::make_particles(config));
+    dem::Engine engine(settings, std::move(initial));
     int frame = 0;
     if (!restart_.empty()) {
       frame = dem::read_checkpoint(engine, restart_);
       if (writer) writer->continue_series(engine.time_s(), frame);
+      if (log) log->continue_series(engine.time_s());
     }
     const double dt = settings.dt_s;
-    // Steps to the config's end from where the (restarted) run stands; a restart may change dt.
+    // Steps to the config's end from where the (restarted) run stands (a restart may change
+    // dt), or --steps N from there.
     const double remaining_s = std::max(0.0, config.end_time_s - engine.time_s());
     const std::uint64_t total_steps =
-        engine.step_count() + static_cast<std::uint64_t>(std::llround(remaining_s / dt));
+        engine.step_count() +
+        (steps_ > 0 ? steps_ : static_cast<std::uint64_t>(std::llround(remaining_s / dt)));
     const std::uint64_t every =
         config.output_every_s > 0
             ? std::max<std::uint64_t>(
@@ -65,38 +102,70 @@ struct DemRunCommand {
             : std::max<std::uint64_t>(1, total_steps);
     fmt::print(
         "dem run '{}': {} particles, {} walls, dt = {:.6g} s (stable limit {:.6g} s), "
-        "steps {} -> {}, {} threads\n",
+        "steps {} -> {}, {} threads{}\n",
         config.name, engine.particles().size(), settings.walls.size(), dt, engine.stable_dt(),
-        engine.step_count(), total_steps, settings.threads);
-    if (writer && engine.step_count() == 0) writer->write(engine, frame++);
+        engine.step_count(), total_steps, settings.threads,
+        has_sink ? fmt::format(", sink below z = {:.6g} m", settings.sink_below_z) : "");
+    auto output = [&] {
+      if (writer) writer->write(engine, frame);
+#ifdef CONTACTLAB_HAVE_CAIRO
+      if (painter) painter->write(engine, frame);
+      if (writer || painter) ++frame;
+#else
+      if (writer) ++frame;
+#endif
+      if (log) log->record(engine);
+    };
+    if (engine.step_count() == 0) output();
     const double t0 = omp_get_wtime();
     const std::uint64_t first_step = engine.step_count();
+    std::uint64_t particle_steps = 0;
     try {
       while (engine.step_count() < total_steps) {
+        particle_steps += engine.particles().size();
         engine.step();
-        if ((engine.step_count() - first_step) % every == 0 || engine.step_count() == total_steps) {
-          if (writer) writer->write(engine, frame++);
+        const bool empty = engine.particles().size() == 0;
+        if ((engine.step_count() - first_step) % every == 0 || engine.step_count() == total_steps ||
+            empty) {
+          output();
           if (!checkpoint.empty()) dem::write_checkpoint(engine, frame, checkpoint);
+        }
+        if (empty) {
+          fmt::print("every particle has left through the sink by t = {:.6g} s: stopping\n",
+                     engine.time_s());
+          break;
         }
       }
     } catch (const dem::UnstableRun& e) {
       fmt::print(stderr, "contactlab: error: unstable run: {}\n", e.what());
       return 4;
     }
+#ifdef CONTACTLAB_HAVE_CAIRO
+    if (painter && log) {
+      const std::string plot = in_dir(png_dir_, config.name + "_discharge.png");
+      dem::write_discharge_plot(plot, log->rows(),
+                                fmt::format("{}: discharged mass (sink below z = {:.4g} m)",
+                                            config.name, settings.sink_below_z));
+    }
+#endif
     const double wall = omp_get_wtime() - t0;
     const double steps = static_cast<double>(engine.step_count() - first_step);
     const dem::Energies e = engine.energies();
     const dem::PhaseTimes& ph = engine.phase_times();
     fmt::print("done: t = {:.6g} s, {} steps in {:.3f} s ({:.3g} particle-steps/s), {} rebuilds\n",
                engine.time_s(), steps, wall,
-               steps * static_cast<double>(engine.particles().size()) / std::max(wall, 1e-9),
-               engine.rebuilds());
+               static_cast<double>(particle_steps) / std::max(wall, 1e-9), engine.rebuilds());
     fmt::print(
         "phases [s]: neighbour list {:.3f}, pair forces {:.3f}, reduction {:.3f}, serial walls "
         "{:.3f}, update {:.3f}, integration {:.3f}\n",
         ph.neighbor_s, ph.pair_forces_s, ph.reduction_s, ph.walls_s, ph.update_s, ph.integrate_s);
     fmt::print("energy [J]: kinetic {:.6g}, potential {:.6g}, dissipated {:.6g}\n", e.kinetic,
                e.potential, e.dissipated);
+    if (has_sink) {
+      const dem::DischargeRow row = dem::discharge_row(engine);
+      fmt::print("discharged: {:.6g} kg in {} particles, {} left\n", row.discharged_kg,
+                 row.discharged, row.left);
+    }
     if (engine.large_overlap_count() > 0) {
       fmt::print("overlaps above 1 % of the smaller diameter: {} contact-steps\n",
                  engine.large_overlap_count());
@@ -317,6 +386,13 @@ Subcommand add_dem_command(CLI::App& app) {
   run_app->add_option("--variant", run->variant_,
                       "force variant, e.g. per-thread/dynamic,4 (default ordered/static)");
   run_app->add_option("--vtk", run->vtk_dir_, "write DIR/<name>.pvd, frames, energy CSV, last.chk");
+  run_app->add_option("--png", run->png_dir_,
+                      "write DIR/<name>_section_NNNNN.png per frame and DIR/<name>_discharge.png");
+  run_app->add_option(
+      "--discharge", run->discharge_,
+      "discharge CSV (default with a sink: DIR/<name>_discharge.csv of --vtk/--png)");
+  run_app->add_option("--steps", run->steps_,
+                      "run N steps from where the run stands (default 0: to the config's end)");
   run_app->add_option("--restart", run->restart_, "continue from a checkpoint of this config");
   run_app->add_option("--checkpoint", run->checkpoint_,
                       "checkpoint file written at every output (default: DIR/last.chk with --vtk)");

@@ -1,5 +1,6 @@
 // `contactlab dem` end to end: frames and energy CSV, a restart that reproduces the
-// uninterrupted run's frames bit for bit, bad configs without output, validate's exit code.
+// uninterrupted run's frames bit for bit, bad configs without output, validate's exit code, a
+// hopper's discharge series, --steps, and its PNG pictures.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -86,6 +87,86 @@ TEST(DemCli, BadConfigIsOneLineAndNoOutput) {
   EXPECT_NE(r.output.find("$.contact.restitution"), std::string::npos) << r.output;
   EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << r.output;
   EXPECT_TRUE(fs::is_empty(out));
+}
+
+// A tiny flat-bottomed hopper: 150 spheres thrown down onto a gate over a 6 mm orifice, the
+// gate gone at 1 ms, a sink 2 mm below the plate.
+std::string tiny_hopper(const TempDir& dir) {
+  const std::string path = dir.file("tiny-hopper.json");
+  std::ofstream(path) << R"({
+    "schema_version": 1, "name": "tiny",
+    "domain": {"lo": [-0.009, -0.009, -0.004], "hi": [0.009, 0.009, 0.02]},
+    "gravity": [0, 0, -9.81],
+    "materials": [{"name": "glass", "density": 2500}],
+    "contact": {"restitution": 0.9, "contact_time": 1e-4, "friction": 0.5},
+    "time": {"dt": 2e-6, "end": 0.004, "output_every": 0.001},
+    "walls": [
+      {"type": "cylinder", "point": [0, 0, 0], "axis": [0, 0, 1], "radius": 0.008, "axial_min": 0},
+      {"type": "orifice_plate", "center": [0, 0, 0], "normal": [0, 0, 1], "orifice_radius": 0.003},
+      {"type": "plane", "name": "gate", "point": [0, 0, 0], "normal": [0, 0, 1], "remove_at": 0.001}],
+    "sink": {"below": -0.002},
+    "lattices": [{"lo": [-0.008, -0.008, 0], "hi": [0.008, 0.008, 0.02], "count": 150,
+                  "radius_min": 0.0005, "radius_max": 0.00075, "radius_distribution": "lognormal",
+                  "sigma": 0.2, "inside_cylinder": {"point": [0, 0, 0], "radius": 0.008},
+                  "material": "glass", "seed": 3, "velocity": [0, 0, -0.8]}]
+  })";
+  return path;
+}
+
+TEST(DemCli, HopperWritesDischargeSeriesAndStopsAfterSteps) {
+  TempDir dir;
+  const std::string config = tiny_hopper(dir);
+  const auto r = run_command(contactlab_exe() + " dem run " + config +
+                             " --threads 1 --steps 1000 --vtk " + root(dir).string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("steps 0 -> 1000"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("sink below z = -0.002 m"), std::string::npos) << r.output;
+  const std::string csv = slurp(root(dir) / "tiny_discharge.csv");
+  EXPECT_EQ(csv.rfind("time_s,step,discharged_kg,discharged_particles,particles_left\n", 0), 0u);
+  EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 4) << csv;  // header, t = 0, 1 and 2 ms
+  // --steps N continues from the checkpoint by N more steps; the series goes on.
+  const auto more =
+      run_command(contactlab_exe() + " dem run " + config + " --threads 1 --steps 500 --vtk " +
+                  root(dir).string() + " --restart " + dir.file("last.chk"));
+  ASSERT_EQ(more.exit_code, 0) << more.output;
+  EXPECT_NE(more.output.find("steps 1000 -> 1500"), std::string::npos) << more.output;
+  const std::string longer = slurp(root(dir) / "tiny_discharge.csv");
+  EXPECT_EQ(longer.rfind(csv, 0), 0u);
+  EXPECT_EQ(std::count(longer.begin(), longer.end(), '\n'), 5) << longer;
+}
+
+TEST(DemCli, RunStopsWhenEveryParticleHasLeft) {
+  TempDir dir;
+  std::string text = slurp(tiny_hopper(dir));
+  const std::string key = "\"below\": -0.002";
+  text.replace(text.find(key), key.size(), "\"below\": 1.0");  // above every particle
+  const std::string config = dir.file("all-out.json");
+  std::ofstream(config) << text;
+  const auto r = run_command(contactlab_exe() + " dem run " + config + " --threads 1 --discharge " +
+                             dir.file("d.csv"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("every particle has left through the sink"), std::string::npos)
+      << r.output;
+  EXPECT_NE(r.output.find("150 particles, 0 left"), std::string::npos) << r.output;
+  const std::string csv = slurp(dir.file("d.csv"));
+  EXPECT_NE(csv.find(",150,0\n"), std::string::npos) << csv;
+}
+
+TEST(DemCli, PngSectionsAndDischargePlot) {
+  TempDir dir;
+  const auto r = run_command(contactlab_exe() + " dem run " + tiny_hopper(dir) +
+                             " --threads 1 --steps 600 --png " + root(dir).string());
+#ifdef CONTACTLAB_HAVE_CAIRO
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  for (const char* file : {"tiny_section_00000.png", "tiny_section_00001.png", "tiny_discharge.png",
+                           "tiny_discharge.csv"}) {
+    EXPECT_TRUE(fs::exists(root(dir) / file)) << file;
+  }
+  EXPECT_EQ(slurp(root(dir) / "tiny_section_00001.png").rfind("\x89PNG\r\n\x1a\n", 0), 0u);
+#else
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("built without cairo"), std::string::npos) << r.output;
+#endif
 }
 
 TEST(DemCli, ValidateStabilityCasePrintsTheTable) {

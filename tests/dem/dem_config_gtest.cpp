@@ -1,6 +1,9 @@
 // Strict reading of DEM configs: every bad config is one error naming its JSON path.
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <functional>
+#include <limits>
 #include <nlohmann/json.hpp>
 
 #include "contactlab/dem/config.hpp"
@@ -50,6 +53,49 @@ TEST(DemConfig, ReadsAGoodConfig) {
   EXPECT_DOUBLE_EQ(c.settings.walls[2].remove_at_s, 0.1);
 }
 
+TEST(DemConfig, ReadsTheSinkLevel) {
+  json config = good();
+  EXPECT_EQ(parse_dem_config(config).settings.sink_below_z,
+            -std::numeric_limits<double>::infinity());
+  config["sink"] = {{"below", -0.5}};
+  EXPECT_EQ(parse_dem_config(config).settings.sink_below_z, -0.5);
+}
+
+// A log-normal lattice in a cylinder: radii in range and spread around the median, every sphere
+// inside the cylinder, none overlapping (the lattice spacing is by the largest diameter).
+TEST(DemConfig, LogNormalLatticeInsideACylinder) {
+  json config = good();
+  config.erase("particles");
+  auto& l = config["lattices"][0];
+  l["lo"] = {-0.02, -0.02, 0.0};
+  l["hi"] = {0.02, 0.02, 0.02};
+  l["count"] = 500;
+  l["radius_distribution"] = "lognormal";
+  l["sigma"] = 0.3;
+  l["inside_cylinder"] = {{"point", {0.001, 0, 0}}, {"radius", 0.015}};
+  l["jitter"] = 1.0;
+  const DemConfig c = parse_dem_config(config);
+  const Particles p = make_particles(c);
+  ASSERT_EQ(p.size(), 500u);
+  double log_sum = 0.0;
+  int below_median = 0;
+  const double median = std::sqrt(5e-4 * 1e-3);
+  for (std::size_t a = 0; a < p.size(); ++a) {
+    EXPECT_GE(p.radius[a], 5e-4);
+    EXPECT_LE(p.radius[a], 1e-3);
+    EXPECT_LE(std::hypot(p.x[a] - 0.001, p.y[a]) + p.radius[a], 0.015) << a;
+    log_sum += std::log(p.radius[a]);
+    below_median += p.radius[a] < median;
+    for (std::size_t b = 0; b < a; ++b) {
+      EXPECT_GE(std::hypot(p.x[a] - p.x[b], p.y[a] - p.y[b], p.z[a] - p.z[b]),
+                p.radius[a] + p.radius[b]);
+    }
+  }
+  EXPECT_NEAR(std::exp(log_sum / 500.0), median, 0.05 * median);
+  EXPECT_GT(below_median, 200);
+  EXPECT_LT(below_median, 300);
+}
+
 struct BadCase {
   const char* what;
   std::function<void(json&)> edit;
@@ -81,6 +127,28 @@ TEST(DemConfig, BadConfigsGetOneClearError) {
       {"particle in a wall", [](json& j) { j["particles"][0]["position"][2] = 0.0005; },
        "overlaps wall"},
       {"dt too large", [](json& j) { j["time"]["dt"] = 1e-4; }, "stable limit"},
+      {"unknown distribution", [](json& j) { j["lattices"][0]["radius_distribution"] = "gamma"; },
+       "$.lattices[0].radius_distribution"},
+      {"log-normal without sigma",
+       [](json& j) { j["lattices"][0]["radius_distribution"] = "lognormal"; },
+       "$.lattices[0]: missing field 'sigma'"},
+      {"unknown cylinder key",
+       [](json& j) {
+         j["lattices"][0]["inside_cylinder"] = {{"point", {0, 0, 0}}, {"radius", 1}, {"r", 1}};
+       },
+       "unknown field 'r'"},
+      {"cylinder too narrow",
+       [](json& j) {
+         j["lattices"][0]["inside_cylinder"] = {{"point", {0.005, 0.005, 0}}, {"radius", 0.002}};
+       },
+       "usable lattice sites inside the cylinder"},
+      {"sink without level", [](json& j) { j["sink"] = json::object(); },
+       "$.sink: missing field 'below'"},
+      {"sink level not a number",
+       [](json& j) {
+         j["sink"] = {{"below", "low"}};
+       },
+       "$.sink.below"},
   };
   for (const BadCase& c : cases) {
     json config = good();

@@ -1,10 +1,12 @@
 // Binary checkpoints: a magic word, counts, the engine's State, then raw arrays.
 #include "contactlab/dem/checkpoint.hpp"
 
+#include <cstdint>
 #include <cstring>
 #include <fstream>
 #include <istream>
 #include <ostream>
+#include <vector>
 
 #include "contactlab/kernels/atomic_file.hpp"
 #include "contactlab/kernels/error.hpp"
@@ -12,7 +14,8 @@
 namespace contactlab::dem {
 namespace {
 
-constexpr char kMagic[8] = {'C', 'L', 'D', 'E', 'M', 'C', 'K', '1'};
+// Format 2 added the sink's counters; particles may be fewer than the config's (removed).
+constexpr char kMagic[8] = {'C', 'L', 'D', 'E', 'M', 'C', 'K', '2'};
 
 template <class T>
 void put(std::ostream& out, const T& v) {
@@ -68,6 +71,8 @@ void write_checkpoint(const Engine& engine, int frames, const std::string& path)
         put(out, s.rebuilds);
         put(out, s.large_overlaps);
         put(out, s.initial_energy);
+        put(out, s.removed_count);
+        put(out, s.removed_mass);
         p.for_each_array([&](const auto& v) { put_array(out, v); });
         put_array(out, q.i);
         put_array(out, q.j);
@@ -84,17 +89,21 @@ int read_checkpoint(Engine& engine, const std::string& path) {
   if (!file) throw InputError("cannot open checkpoint '" + path + "'");
   char magic[8];
   file.read(magic, sizeof magic);
-  if (!file || std::memcmp(magic, kMagic, sizeof magic) != 0) {
+  // Format 1 (before the sink) is read too: it has no sink counters (zero).
+  const bool version1 = file && std::memcmp(magic, kMagic, 7) == 0 && magic[7] == '1';
+  if (!file || (!version1 && std::memcmp(magic, kMagic, sizeof magic) != 0)) {
     throw InputError(path + ": not a contactlab DEM checkpoint");
   }
   Reader in(file, path);
   const auto n = in.get<std::uint64_t>();
   const auto walls3 = in.get<std::uint64_t>();
   const auto pairs = in.get<std::uint64_t>();
-  if (n != engine.particles().size() || walls3 != engine.particles().wall_spring.size()) {
-    throw InputError(path + ": checkpoint has " + std::to_string(n) +
-                     " particles and another wall count than the config (" +
-                     std::to_string(engine.particles().size()) + " particles)");
+  // The sink may have removed particles: a checkpoint holds at most the config's.
+  if (n > engine.particles().size() || walls3 != engine.particles().wall_spring.size()) {
+    throw InputError(path + ": checkpoint has " + std::to_string(n) + " particles and " +
+                     std::to_string(walls3 / 3) + " walls, the config " +
+                     std::to_string(engine.particles().size()) + " and " +
+                     std::to_string(engine.particles().wall_spring.size() / 3));
   }
   const int frames = in.get<std::int32_t>();
   Engine::State s;
@@ -103,8 +112,19 @@ int read_checkpoint(Engine& engine, const std::string& path) {
   s.rebuilds = in.get<std::uint64_t>();
   s.large_overlaps = in.get<std::uint64_t>();
   s.initial_energy = in.get<double>();
+  if (!version1) {
+    s.removed_count = in.get<std::uint64_t>();
+    s.removed_mass = in.get<double>();
+  }
   Particles p = engine.particles();
   p.for_each_array([&](auto& v) { in.array(v, n); });
+  std::vector<std::uint8_t> seen(engine.id_capacity(), 0);
+  for (std::uint32_t id : p.id) {
+    if (id >= seen.size() || seen[id] != 0) {
+      throw InputError(path + ": checkpoint particle ids do not match the config");
+    }
+    seen[id] = 1;
+  }
   PairList q;
   in.array(q.i, pairs);
   in.array(q.j, pairs);

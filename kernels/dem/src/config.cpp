@@ -145,6 +145,22 @@ LatticeSpec parse_lattice(const JsonIn& in) {
   s.count = static_cast<std::uint32_t>(number(o, "count", std::nullopt, 1.0, 1e9));
   s.radius_min = number(o, "radius_min", std::nullopt, 0.0, kHuge, true);
   s.radius_max = number(o, "radius_max", s.radius_min, s.radius_min, kHuge);
+  const std::string distribution = text(o, "radius_distribution", "uniform");
+  if (distribution == "uniform") {
+    s.distribution = RadiusDistribution::kUniform;
+  } else if (distribution == "lognormal") {
+    s.distribution = RadiusDistribution::kLogNormal;
+    s.sigma = number(o, "sigma", std::nullopt, 0.0, 2.0, true);
+  } else {
+    o.field("radius_distribution").fail("must be 'uniform' or 'lognormal'");
+  }
+  if (const auto cylinder = o.optional_field("inside_cylinder")) {
+    ObjectIn c(*cylinder);
+    s.in_cylinder = true;
+    s.cylinder_point = vec(c, "point", std::nullopt);
+    s.cylinder_radius = number(c, "radius", std::nullopt, 0.0, kHuge, true);
+    c.finish();
+  }
   s.material = text(o, "material", std::nullopt);
   s.gap = number(o, "gap", 0.05, 0.0, 10.0);
   s.jitter = number(o, "jitter", 0.5, 0.0, 1.0);
@@ -211,6 +227,11 @@ DemConfig parse_dem_config(const json& document) {
       t.field("velocity_in_forces").fail("must be 'synchronised' or 'half_step'");
     }
     t.finish();
+  }
+  if (const auto sink = o.optional_field("sink")) {
+    ObjectIn k(*sink);
+    s.sink_below_z = number(k, "below", std::nullopt, -kHuge, kHuge);
+    k.finish();
   }
   if (const auto nb = o.optional_field("neighbor")) {
     ObjectIn n(*nb);
@@ -295,22 +316,52 @@ Particles make_particles(const DemConfig& config) {
       const double span = s.hi[a] - s.lo[a];
       cells[a] = span >= pitch ? static_cast<std::uint64_t>(span / pitch) : 0;
     }
-    if (cells[0] * cells[1] * cells[2] < s.count) {
+    auto site_centre = [&](std::uint64_t site, int a) {
+      const std::uint64_t index = a == 0   ? site % cells[0]
+                                  : a == 1 ? (site / cells[0]) % cells[1]
+                                           : site / (cells[0] * cells[1]);
+      return s.lo[a] + (static_cast<double>(index) + 0.5) * pitch;
+    };
+    // A site's sphere, moved by up to half a pitch per axis, stays within sqrt(2)/2 pitch of
+    // the site horizontally: such sites are inside the cylinder whatever the draw.
+    auto usable = [&](std::uint64_t site) {
+      if (!s.in_cylinder) return true;
+      const double dx = site_centre(site, 0) - s.cylinder_point[0],
+                   dy = site_centre(site, 1) - s.cylinder_point[1];
+      return std::hypot(dx, dy) + std::numbers::sqrt2 / 2.0 * pitch <= s.cylinder_radius;
+    };
+    const std::uint64_t sites = cells[0] * cells[1] * cells[2];
+    std::vector<std::uint64_t> chosen;
+    chosen.reserve(s.count);
+    for (std::uint64_t site = 0; site < sites && chosen.size() < s.count; ++site) {
+      if (usable(site)) chosen.push_back(site);
+    }
+    if (chosen.size() < s.count) {
       throw InputError("$.lattices[" + std::to_string(l) + "]: the region holds " +
-                       std::to_string(cells[0] * cells[1] * cells[2]) + " lattice sites, " +
+                       std::to_string(chosen.size()) + " usable lattice sites" +
+                       (s.in_cylinder ? " inside the cylinder" : "") + ", " +
                        std::to_string(s.count) + " requested");
     }
     Xoshiro256 rng(s.seed);
-    for (std::uint32_t k = 0; k < s.count; ++k) {
-      const std::uint64_t ix = k % cells[0], iy = (k / cells[0]) % cells[1],
-                          iz = k / (cells[0] * cells[1]);
-      const double r = s.radius_min + (s.radius_max - s.radius_min) * rng.uniform();
+    auto draw_radius = [&] {
+      if (s.distribution == RadiusDistribution::kUniform || s.radius_max == s.radius_min) {
+        return s.radius_min + (s.radius_max - s.radius_min) * rng.uniform();
+      }
+      const double log_median = 0.5 * (std::log(s.radius_min) + std::log(s.radius_max));
+      for (;;) {  // Box-Muller; redrawn outside the range (at least 1/3 of draws are inside)
+        const double u = rng.uniform_open(), v = rng.uniform();
+        const double normal = std::sqrt(-2.0 * std::log(u)) * std::cos(2.0 * std::numbers::pi * v);
+        const double r = std::exp(log_median + s.sigma * normal);
+        if (r >= s.radius_min && r <= s.radius_max) return r;
+      }
+    };
+    for (std::uint64_t site : chosen) {
+      const double r = draw_radius();
       const double free = 0.5 * pitch - r;  // room around the sphere in its cell
-      const double c[3] = {s.lo[0] + (static_cast<double>(ix) + 0.5) * pitch,
-                           s.lo[1] + (static_cast<double>(iy) + 0.5) * pitch,
-                           s.lo[2] + (static_cast<double>(iz) + 0.5) * pitch};
       double pos[3];
-      for (int a = 0; a < 3; ++a) pos[a] = c[a] + s.jitter * free * (2.0 * rng.uniform() - 1.0);
+      for (int a = 0; a < 3; ++a) {
+        pos[a] = site_centre(site, a) + s.jitter * free * (2.0 * rng.uniform() - 1.0);
+      }
       p.add(next_id++, m, pos[0], pos[1], pos[2], r, config.materials[m].density);
       const std::size_t q = p.size() - 1;
       p.vx[q] = s.velocity[0];

@@ -96,11 +96,13 @@ void Engine::refresh_kinematics() {
 }
 
 void Engine::rebuild() {
-  builder_.rebuild(particles_, pairs_, settings_.domain, settings_.skin, coefficients_.mu_roll > 0);
+  remove_sunk_particles();  // sink.cpp: removals happen at rebuilds only
+  if (!particles_.id.empty()) {
+    builder_.rebuild(particles_, pairs_, settings_.domain, settings_.skin,
+                     coefficients_.mu_roll > 0);
+  }
   ++rebuilds_;
-  index_of_id_.resize(particles_.size());
-  for (std::size_t a = 0; a < particles_.size(); ++a)
-    index_of_id_[particles_.id[a]] = static_cast<std::uint32_t>(a);
+  index_ids();
   refresh_kinematics();
 }
 
@@ -443,15 +445,15 @@ void Engine::restore(const State& state, Particles particles, PairList pairs) {
   rebuilds_ = state.rebuilds;
   large_overlaps_ = state.large_overlaps;
   initial_energy_ = state.initial_energy;
+  removed_count_ = state.removed_count;
+  removed_mass_ = state.removed_mass;
   particles_ = std::move(particles);
   const auto shift = pairs_.shift;
   pairs_ = std::move(pairs);
   pairs_.shift = shift;
   pairs_.resize(pairs_.i.size(), coefficients_.mu_roll > 0);
   pairs_.build_csr(particles_.size());
-  index_of_id_.assign(particles_.size(), 0);
-  for (std::size_t a = 0; a < particles_.size(); ++a)
-    index_of_id_[particles_.id[a]] = static_cast<std::uint32_t>(a);
+  index_ids();
   refresh_kinematics();
 }
 

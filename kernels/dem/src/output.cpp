@@ -53,8 +53,14 @@ void FrameWriter::continue_series(double until_time_s, int frames) {
 void FrameWriter::write(const Engine& engine, int frame) {
   const Particles& p = engine.particles();
   const std::size_t n = p.size();
-  std::vector<std::uint32_t> order(n);  // stable-id order: frames comparable across reorders
-  for (std::size_t a = 0; a < n; ++a) order[p.id[a]] = static_cast<std::uint32_t>(a);
+  // Stable-id order: frames comparable across reorders. Ids are not dense once the sink has
+  // removed particles: the present ones, ascending.
+  std::vector<std::uint32_t> by_id(engine.id_capacity(), Engine::kRemoved), order;
+  for (std::size_t a = 0; a < n; ++a) by_id[p.id[a]] = static_cast<std::uint32_t>(a);
+  order.reserve(n);
+  for (std::uint32_t a : by_id) {
+    if (a != Engine::kRemoved) order.push_back(a);
+  }
   const std::string file = frame_path(frame);
   write_file_atomically(file, [&](std::ostream& out) {
     out << "<?xml version=\"1.0\"?>\n<VTKFile type=\"PolyData\" version=\"1.0\" "

@@ -13,7 +13,8 @@ namespace contactlab::dem {
 void write_checkpoint(const Engine& engine, int frames, const std::string& path);
 
 // Restores `engine` (built from the same config) from `path`; returns the frame count. Throws
-// InputError for a missing, truncated or foreign file, or one of another particle/wall count.
+// InputError for a missing, truncated or foreign file, or one with more particles than the
+// config (fewer is fine: the sink removes some), ids the config lacks, or another wall count.
 int read_checkpoint(Engine& engine, const std::string& path);
 
 }  // namespace contactlab::dem

@@ -5,6 +5,7 @@
 
 #include <array>
 #include <cstdint>
+#include <limits>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -41,6 +42,9 @@ struct EngineSettings {
   // fused update, is bit-identical for any thread count; with update=separate PhaseTimes
   // splits the pair forces from walls + finish + kick.
   ForceVariant force_variant;
+  // The sink (LIGGGHTS `delete` region): particles whose centre is below this height [m] leave
+  // the run at the next neighbour-list rebuild, their mass counted (sink.cpp). -inf = no sink.
+  double sink_below_z = -std::numeric_limits<double>::infinity();
 };
 
 // Phase times of step() [s], summed since construction: the neighbour list (candidates; a
@@ -90,8 +94,15 @@ class Engine {
   std::uint64_t step_count() const { return step_; }
   std::uint64_t rebuilds() const { return rebuilds_; }
   const PhaseTimes& phase_times() const { return phases_; }
-  // Index of the particle with stable id `id` in the current order.
+  // Index of the particle with stable id `id` in the current order; kRemoved once the sink took
+  // it (ids stay those of the config: after removals they are no longer dense).
+  static constexpr std::uint32_t kRemoved = UINT32_MAX;
   std::uint32_t index_of(std::uint32_t id) const { return index_of_id_[id]; }
+  // One more than the largest stable id the run started with (arrays indexed by id use it).
+  std::size_t id_capacity() const { return index_of_id_.size(); }
+  // Particles the sink removed so far, and their mass [kg].
+  std::uint64_t removed_count() const { return removed_count_; }
+  double removed_mass() const { return removed_mass_; }
   Energies energies() const;
   // Pairs with overlap above 1 % of the smaller diameter, counted over all steps (and whether
   // the one warning has been given).
@@ -103,8 +114,13 @@ class Engine {
     double time_s = 0.0;
     std::uint64_t step = 0, rebuilds = 0, large_overlaps = 0;
     double initial_energy = 0.0;
+    std::uint64_t removed_count = 0;
+    double removed_mass = 0.0;
   };
-  State state() const { return {time_s_, step_, rebuilds_, large_overlaps_, initial_energy_}; }
+  State state() const {
+    return {time_s_,         step_,          rebuilds_,    large_overlaps_,
+            initial_energy_, removed_count_, removed_mass_};
+  }
   // Replaces the state with a checkpoint's (particles and pairs as saved, CSR rebuilt).
   void restore(const State& state, Particles particles, PairList pairs);
 
@@ -112,6 +128,10 @@ class Engine {
 
  private:
   void rebuild();
+  // sink.cpp: removes the particles below the sink level (particle arrays and the old pair
+  // list, renumbered), and indexes the stable ids of the particles left.
+  void remove_sunk_particles();
+  void index_ids();
   void refresh_kinematics();  // kin_ from the particle arrays (after a reorder or restore)
   void compute_forces(bool final_kick);
   void check_pair_overlap(std::size_t k) const;
@@ -125,6 +145,8 @@ class Engine {
   std::vector<std::uint32_t> index_of_id_;
   double time_s_ = 0.0;
   std::uint64_t step_ = 0, rebuilds_ = 0, large_overlaps_ = 0;
+  std::uint64_t removed_count_ = 0;
+  double removed_mass_ = 0.0;
   bool warned_ = false;
   double stable_dt_ = 0.0, initial_energy_ = 0.0;
   double base_time_s_ = 0.0;  // time and step of the last restore: t = base + (step - base) dt
