@@ -286,7 +286,7 @@ struct DemVariantsCommand {
 struct DemProfileCommand {
   std::string config_;
   std::string restart_;
-  std::string variant_ = "ordered/static/update=separate";
+  std::string variant_ = "ordered/static";
   std::vector<int> threads_{1, 2};
   std::uint64_t steps_ = 200;
   int run() const {
@@ -335,7 +335,7 @@ struct DemProfileCommand {
     fmt::print("phase split at 1 thread (the report: forces 80 %, update 15 %, candidates 5 %)\n");
     const std::pair<const char*, double> phases[] = {
         {"candidates (neighbour list)", one.phases.neighbor_s},
-        {variant.separate_update || variant.accumulation != dem::Accumulation::kOrdered
+        {!variant.fused_update || variant.accumulation != dem::Accumulation::kOrdered
              ? "pair forces"
              : "pair forces + reduction + update (fused)",
          one.phases.pair_forces_s},
@@ -417,8 +417,7 @@ Subcommand add_dem_command(CLI::App& app) {
       "profile", "phase split, serial fraction, Amdahl bound against the measured speed-up");
   profile_app->add_option("config", profile->config_, "DEM config")->required();
   profile_app->add_option("--restart", profile->restart_, "start from this checkpoint");
-  profile_app->add_option("--variant", profile->variant_,
-                          "force variant (default ordered/static/update=separate: phases split)");
+  profile_app->add_option("--variant", profile->variant_, "force variant (default ordered/static)");
   profile_app->add_option("--threads", profile->threads_, "thread counts, from 1 (default 1,2)")
       ->delimiter(',');
   profile_app->add_option("--steps", profile->steps_, "timed steps per thread count (200)");

@@ -187,9 +187,8 @@ TEST(DemCli, TimestepPrintsLimitAndTable) {
 // Every validation case also passes on the report's variant (per-thread arrays, dynamic
 // schedule, serial walls) at two threads.
 TEST(DemCli, ValidatePassesOnTheReportsVariant) {
-  const auto r = run_command(contactlab_exe() +
-                             " dem validate --variant per-thread/dynamic,1/walls=serial/"
-                             "update=separate --threads 2");
+  const auto r = run_command(
+      contactlab_exe() + " dem validate --variant per-thread/dynamic,1/walls=serial --threads 2");
   EXPECT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("All cases pass."), std::string::npos) << r.output;
 }
@@ -197,7 +196,7 @@ TEST(DemCli, ValidatePassesOnTheReportsVariant) {
 TEST(DemCli, VariantsTablesSpeedAgainstTheDefault) {
   const auto r = run_command(contactlab_exe() + " dem variants " + config_path() +
                              " --steps 20 --threads 1,2 --variant atomic/dynamic,8"
-                             " --variant ordered/static/update=separate");
+                             " --variant ordered/static/update=fused");
   EXPECT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("atomic/dynamic,8"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("bit-identical"), std::string::npos) << r.output;

@@ -43,7 +43,7 @@ TEST(DemEngine, FusedAndSplitForcePassesAgree) {
   for (const bool fused : {true, false}) {
     for (const int threads : {1, 3}) {
       EngineSettings s = settings;
-      s.force_variant.separate_update = !fused;
+      s.force_variant.fused_update = fused;
       s.threads = threads;
       Engine engine(s, particles);
       engine.run_steps(800);

@@ -28,7 +28,7 @@ TEST(DemForceVariant, EveryEnumeratedVariantRoundTrips) {
       parse_force_variant("per-thread/dynamic,1/walls=serial/update=separate");
   EXPECT_EQ(report.accumulation, Accumulation::kPerThread);
   EXPECT_TRUE(report.serial_walls);
-  EXPECT_TRUE(report.separate_update);
+  EXPECT_FALSE(report.fused_update);
   EXPECT_FALSE(thread_count_invariant(report));
   EXPECT_TRUE(thread_count_invariant(ForceVariant{}));
 }
@@ -47,7 +47,8 @@ TEST(DemForceVariant, BadTextAndBrokenRulesAreInputErrors) {
   EXPECT_NE(message("atomic/sometimes").find("schedule"), std::string::npos);
   EXPECT_NE(message("atomic/static/walls=maybe").find("walls=maybe"), std::string::npos);
   EXPECT_NE(message("ordered/dynamic,4").find("static block partition"), std::string::npos);
-  EXPECT_NE(message("atomic/static/walls=serial").find("update=separate"), std::string::npos);
+  EXPECT_NE(message("atomic/static/walls=serial/update=fused").find("cannot be fused"),
+            std::string::npos);
 }
 
 std::vector<double> run_variant(const ForceVariant& variant, int threads, int steps) {
@@ -61,8 +62,7 @@ std::vector<double> run_variant(const ForceVariant& variant, int threads, int st
 
 TEST(DemForceVariant, OrderedIsBitIdenticalWhereverWallsAndUpdateRun) {
   const std::vector<double> reference = run_variant(ForceVariant{}, 1, 600);
-  for (const char* text :
-       {"ordered/static/update=separate", "ordered/static/walls=serial/update=separate"}) {
+  for (const char* text : {"ordered/static/update=fused", "ordered/static/walls=serial"}) {
     for (const int threads : {1, 3}) {
       EXPECT_TRUE(
           test::bitwise_equal(reference, run_variant(parse_force_variant(text), threads, 600)))
@@ -73,9 +73,8 @@ TEST(DemForceVariant, OrderedIsBitIdenticalWhereverWallsAndUpdateRun) {
 
 TEST(DemForceVariant, SharedAccumulationsMatchOrderedOnOneThreadAndStayCloseOnSeveral) {
   const std::vector<double> reference = run_variant(ForceVariant{}, 1, 600);
-  for (const char* text :
-       {"per-thread/static", "per-thread/dynamic,4/update=separate", "atomic/guided,2",
-        "per-thread/dynamic,1/walls=serial/update=separate"}) {
+  for (const char* text : {"per-thread/static", "per-thread/dynamic,4/update=fused",
+                           "atomic/guided,2", "per-thread/dynamic,1/walls=serial"}) {
     const ForceVariant variant = parse_force_variant(text);
     // One thread, rows in order: the same sums in the same order as ordered.
     if (variant.schedule.kind == ScheduleKind::kStatic) {

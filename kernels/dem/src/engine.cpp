@@ -357,7 +357,7 @@ void Engine::compute_forces(bool final_kick) {
     {
       std::vector<double>& scratch = block_scratch_[omp_get_thread_num()];
       if (ordered) {
-        detail::force_pass<kRolling, kClamp>(kin, n, q, c, dt, !variant.separate_update,
+        detail::force_pass<kRolling, kClamp>(kin, n, q, c, dt, variant.fused_update,
                                              variant.serial_walls, acc, scratch, finish, walls,
                                              mark, large, bad_pair, bad_wall_particle);
       } else {
@@ -375,7 +375,7 @@ void Engine::compute_forces(bool final_kick) {
   }
   const double t_end = omp_get_wtime();
   // The fused ordered pass finishes particles among the pairs: all of it counts as pair forces.
-  if (ordered && !variant.separate_update) phase_end[0] = phase_end[1] = phase_end[2] = t_end;
+  if (ordered && variant.fused_update) phase_end[0] = phase_end[1] = phase_end[2] = t_end;
   const double t_pairs = phase_end[0];
   const double t_reduced = phase_end[1] < 0 ? t_pairs : phase_end[1];
   const double t_walls = phase_end[2] < 0 ? t_reduced : phase_end[2];

@@ -37,7 +37,7 @@ std::string to_string(const ForceVariant& variant) {
   text += '/';
   text += to_string(variant.schedule);
   if (variant.serial_walls) text += "/walls=serial";
-  if (variant.separate_update) text += "/update=separate";
+  if (variant.fused_update) text += "/update=fused";
   return text;
 }
 
@@ -62,9 +62,9 @@ ForceVariant parse_force_variant(std::string_view text) {
     } else if (parts[k] == "walls=parallel") {
       variant.serial_walls = false;
     } else if (parts[k] == "update=separate") {
-      variant.separate_update = true;
+      variant.fused_update = false;
     } else if (parts[k] == "update=fused") {
-      variant.separate_update = false;
+      variant.fused_update = true;
     } else {
       throw InputError(quoted + ": part '" + std::string(parts[k]) +
                        "' is not walls=serial|parallel or update=separate|fused");
@@ -79,8 +79,8 @@ std::optional<std::string_view> broken_rule(const ForceVariant& variant) {
       !(variant.schedule.kind == ScheduleKind::kStatic && variant.schedule.chunk == 0)) {
     return "ordered accumulation needs the static block partition (schedule 'static')";
   }
-  if (variant.serial_walls && !variant.separate_update) {
-    return "serial walls need the separate update (update=separate)";
+  if (variant.serial_walls && variant.fused_update) {
+    return "serial walls cannot be fused into the update (drop update=fused)";
   }
   return std::nullopt;
 }
@@ -100,13 +100,13 @@ std::vector<ForceVariant> force_variants(const std::vector<int>& chunks) {
   std::vector<ForceVariant> variants;
   for (const auto& [accumulation, name] : kAccumulations) {
     for (const Schedule& schedule : schedules) {
-      for (const bool separate : {false, true}) {
-        const ForceVariant variant{accumulation, schedule, false, separate};
+      for (const bool fused : {false, true}) {
+        const ForceVariant variant{accumulation, schedule, false, fused};
         if (!broken_rule(variant)) variants.push_back(variant);
       }
     }
   }
-  variants.push_back({Accumulation::kPerThread, {ScheduleKind::kDynamic, 1}, true, true});
+  variants.push_back({Accumulation::kPerThread, {ScheduleKind::kDynamic, 1}, true, false});
   return variants;
 }
 
