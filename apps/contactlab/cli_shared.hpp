@@ -32,6 +32,8 @@ Subcommand add_tune_command(CLI::App& app, const std::string& command_line);
 Subcommand add_partition_command(CLI::App& app);
 Subcommand add_demo_command(CLI::App& app);
 Subcommand add_dem_command(CLI::App& app);
+// `dem variants` and `dem profile`, under the dem command (dem_study_command.cpp).
+std::vector<Subcommand> add_dem_study_commands(CLI::App& dem_app);
 
 // Where the particles come from: a file, or a generator spec.
 struct SceneOptions {

@@ -206,5 +206,18 @@ TEST(DemCli, VariantsTablesSpeedAgainstTheDefault) {
   EXPECT_NE(bad.output.find("static block partition"), std::string::npos) << bad.output;
 }
 
+TEST(DemCli, ProfilePrintsPhasesSerialFractionAndAmdahl) {
+  const auto r =
+      run_command(contactlab_exe() + " dem profile " + config_path() + " --steps 20 --threads 1,2");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  for (const char* line : {"candidates (neighbour list)", "pair forces", "serial fraction",
+                           "Amdahl bound at 2 / 8 / 16 threads", "Karp-Flatt"}) {
+    EXPECT_NE(r.output.find(line), std::string::npos) << line << "\n" << r.output;
+  }
+  const auto bad = run_command(contactlab_exe() + " dem profile " + config_path() + " --threads 2");
+  EXPECT_EQ(bad.exit_code, 2) << bad.output;
+  EXPECT_NE(bad.output.find("must start with 1"), std::string::npos) << bad.output;
+}
+
 }  // namespace
 }  // namespace contactlab::test
