@@ -218,7 +218,7 @@ inline void accumulate_shared(const double* kin, const PairList& q, std::size_t 
 // The force pass of the non-ordered accumulations (per-thread arrays, atomics): blocks of rows
 // shared out by the variant's schedule (`omp for schedule(runtime)`: the caller sets it), then
 // the per-thread arrays summed in thread order, the walls by one thread when serial_walls, and
-// the update (finish(a, with_walls, ...)) shared out by the same schedule.
+// the update (finish(a, with_walls, ...)) over the same blocks by the same schedule.
 template <bool kRolling, bool kClamp, class Finish, class Walls, class Mark>
 void force_pass_shared(const double* kin, std::size_t n, PairList& q, const PairCoefficients& c,
                        double dt, bool atomic, bool serial_walls, double* acc,
@@ -268,8 +268,13 @@ void force_pass_shared(const double* kin, std::size_t n, PairList& q, const Pair
     for (std::size_t a = 0; a < n; ++a) walls(a, large_here, bad_wall_here);
     mark(Phase::kWalls);
   }
+  // The update over the same blocks of particles as the pairs (a chunk of k is k blocks in
+  // both loops; per particle, dynamic,1 would pay a scheduling round trip per particle).
 #pragma omp for schedule(runtime)
-  for (std::size_t a = 0; a < n; ++a) finish(a, !serial_walls, large_here, bad_wall_here);
+  for (std::size_t block = 0; block < blocks; ++block) {
+    const std::size_t first = block * kRowsPerBlock, last = std::min(n, first + kRowsPerBlock);
+    for (std::size_t a = first; a < last; ++a) finish(a, !serial_walls, large_here, bad_wall_here);
+  }
   combine_counts(large_here, bad_here, large, bad_pair);
   combine_counts(0, bad_wall_here, large, bad_wall);
 }
