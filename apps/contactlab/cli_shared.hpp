@@ -35,6 +35,17 @@ Subcommand add_dem_command(CLI::App& app);
 // `dem variants` and `dem profile`, under the dem command (dem_study_command.cpp).
 std::vector<Subcommand> add_dem_study_commands(CLI::App& dem_app);
 
+// `tune --dem CONFIG`: every force variant timed on the config's scene at `threads`, the
+// fastest chosen, the default's and the report's regret printed (dem_study_command.cpp).
+struct DemTuneRequest {
+  std::string config;
+  std::string restart;
+  std::uint64_t steps = 200;
+  int threads = 1;
+  std::string json_out;
+};
+int tune_dem(const DemTuneRequest& request);
+
 // Where the particles come from: a file, or a generator spec.
 struct SceneOptions {
   std::string input_;

@@ -1,10 +1,13 @@
 // `contactlab dem variants` and `dem profile`: the force variants' speed against error, and
 // the report's profile (phase split, serial fraction, Amdahl bound against the measured
-// speed-up), both on a config's scene or a checkpoint of it.
+// speed-up); `tune --dem`: the fastest force variant by timing every one. All on a config's
+// scene or a checkpoint of it.
 #include <fmt/core.h>
 #include <omp.h>
 
+#include <algorithm>
 #include <memory>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <utility>
 #include <vector>
@@ -13,6 +16,7 @@
 #include "contactlab/dem/checkpoint.hpp"
 #include "contactlab/dem/config.hpp"
 #include "contactlab/dem/variant_study.hpp"
+#include "contactlab/kernels/atomic_file.hpp"
 #include "contactlab/kernels/error.hpp"
 
 namespace contactlab::cli {
@@ -171,6 +175,63 @@ struct DemProfileCommand {
 };
 
 }  // namespace
+
+int tune_dem(const DemTuneRequest& request) {
+  if (request.steps == 0) throw InputError("--dem-steps must be >= 1");
+  if (!request.json_out.empty()) check_writable(request.json_out);
+  DemStart start;
+  start.config = request.config;
+  start.restart = request.restart;
+  start.threads = {request.threads};
+  start.steps = request.steps;
+  const dem::DemConfig config = start.checked_config();
+  const dem::Particles particles = dem::make_particles(config);
+  const std::vector<dem::ForceVariant> variants = dem::force_variants({1, 4, 16});
+  auto make_engine = [&](const dem::ForceVariant& variant, int threads) {
+    return start.engine(config, particles, variant, threads);
+  };
+  const std::vector<dem::VariantStudyRow> rows =
+      dem::variant_study(make_engine, variants, start.threads, start.steps);
+  const auto best = std::min_element(
+      rows.begin(), rows.end(), [](const auto& a, const auto& b) { return a.seconds < b.seconds; });
+  auto regret = [&](const dem::ForceVariant& v) {
+    for (const dem::VariantStudyRow& r : rows) {
+      if (r.variant == v) return r.seconds / best->seconds - 1.0;
+    }
+    return 0.0;
+  };
+  const dem::ForceVariant report_choice =
+      dem::parse_force_variant("per-thread/dynamic,1/walls=serial");
+  fmt::print(
+      "tune --dem '{}': {} particles, {} threads, {} force variants timed for {} steps each "
+      "(exhaustive; one run each)\n",
+      config.name, particles.size(), request.threads, rows.size(), request.steps);
+  fmt::print("chosen      {:<48} {:.4g} particle-steps/s, max |dx| / d {:.3g} from the default\n",
+             dem::to_string(best->variant), best->particle_steps_per_s, best->max_deviation);
+  fmt::print("default     {:<48} regret {:+.1f}%\n", dem::to_string(dem::ForceVariant{}),
+             100.0 * regret(dem::ForceVariant{}));
+  fmt::print("report's    {:<48} regret {:+.1f}%\n", dem::to_string(report_choice),
+             100.0 * regret(report_choice));
+  if (!request.json_out.empty()) {
+    nlohmann::json doc;
+    doc["kind"] = "dem_force_variant_tuning";
+    doc["config"] = request.config;
+    doc["threads"] = request.threads;
+    doc["steps"] = request.steps;
+    doc["chosen"] = dem::to_string(best->variant);
+    doc["variants"] = nlohmann::json::array();
+    for (const dem::VariantStudyRow& r : rows) {
+      doc["variants"].push_back({{"variant", dem::to_string(r.variant)},
+                                 {"seconds", r.seconds},
+                                 {"particle_steps_per_s", r.particle_steps_per_s},
+                                 {"regret", r.seconds / best->seconds - 1.0},
+                                 {"max_deviation_diameters", r.max_deviation},
+                                 {"bit_identical_to_default", r.bit_identical}});
+    }
+    write_file_atomically(request.json_out, [&](std::ostream& out) { out << doc.dump(2) << '\n'; });
+  }
+  return 0;
+}
 
 std::vector<Subcommand> add_dem_study_commands(CLI::App& dem_app) {
   auto variants = std::make_shared<DemVariantsCommand>();

@@ -35,6 +35,7 @@ struct TuneCommand {
   std::string mpi_;  // empty: no MPI (the default, whether or not under mpirun)
   std::uint32_t block_ = 200;
   double halo_ = 0.0;
+  DemTuneRequest dem_;  // --dem: tune the DEM force pass instead of detection
 
   void add_to(CLI::App& sub);
   void check() const;
@@ -66,6 +67,10 @@ void TuneCommand::add_to(CLI::App& sub) {
   sub.add_option("--block", block_, "--mpi replicated: block size of the block-cyclic deal");
   sub.add_option("--halo", halo_,
                  "--mpi decomposed: halo width (default D, or the largest diameter)");
+  sub.add_option("--dem", dem_.config,
+                 "tune the DEM force pass of this config (exhaustive over the force variants)");
+  sub.add_option("--restart", dem_.restart, "--dem: start from this checkpoint of the config");
+  sub.add_option("--dem-steps", dem_.steps, "--dem: timed steps per variant (200)");
 }
 
 void TuneCommand::check() const {
@@ -113,6 +118,13 @@ void print_report(const tn::TuneDocument& report) {
 }
 
 int TuneCommand::run() const {
+  if (!dem_.config.empty()) {
+    check();
+    DemTuneRequest request = dem_;
+    request.threads = resolve_threads(threads_);
+    request.json_out = json_out_;
+    return tune_dem(request);
+  }
   if (!mpi_.empty()) {
 #ifdef CONTACTLAB_HAVE_MPI
     MpiTuneRequest request;

@@ -219,5 +219,20 @@ TEST(DemCli, ProfilePrintsPhasesSerialFractionAndAmdahl) {
   EXPECT_NE(bad.output.find("must start with 1"), std::string::npos) << bad.output;
 }
 
+// tune --dem times every force variant and names the fastest; the report lists them all.
+TEST(DemCli, TuneDemChoosesTheFastestForceVariant) {
+  TempDir dir;
+  const std::string report = dir.file("tune-dem.json");
+  const auto r = run_command(contactlab_exe() + " tune --dem " + config_path() +
+                             " --threads 2 --dem-steps 5 --json " + report);
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  for (const char* line : {"chosen", "default     ordered/static", "report's"}) {
+    EXPECT_NE(r.output.find(line), std::string::npos) << line << "\n" << r.output;
+  }
+  const std::string json = slurp(report);
+  EXPECT_NE(json.find("\"kind\": \"dem_force_variant_tuning\""), std::string::npos) << json;
+  EXPECT_NE(json.find("per-thread/dynamic,16"), std::string::npos) << json;
+}
+
 }  // namespace
 }  // namespace contactlab::test
