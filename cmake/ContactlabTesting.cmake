@@ -5,8 +5,10 @@
 # (sanitized builds run slower) and tests/common on the include path.
 include(GoogleTest)
 
-function(contactlab_add_gtest name)
-  cmake_parse_arguments(ARG "" "SOURCE;TIMEOUT" "LIBS;LABELS;ENVIRONMENT;PROPERTIES" ${ARGN})
+# The executable both registrations build: NAME from SOURCE (default NAME.cpp) with LIBS, the
+# flags and tests/common; sets `timeout` in the caller to TIMEOUT (default 120 s) scaled by
+# CONTACTLAB_TEST_TIME_SCALE. A macro, so it reads the caller's parsed ARG_* values.
+macro(_contactlab_test_executable name)
   if(NOT ARG_SOURCE)
     set(ARG_SOURCE ${name}.cpp)
   endif()
@@ -14,10 +16,16 @@ function(contactlab_add_gtest name)
     set(ARG_TIMEOUT 120)
   endif()
   add_executable(${name} ${ARG_SOURCE})
-  target_link_libraries(${name} PRIVATE ${ARG_LIBS} contactlab::flags GTest::gtest_main)
+  target_link_libraries(${name} PRIVATE ${ARG_LIBS} contactlab::flags)
   target_include_directories(${name} PRIVATE ${CMAKE_CURRENT_SOURCE_DIR}
                                              ${PROJECT_SOURCE_DIR}/tests/common)
   math(EXPR timeout "${ARG_TIMEOUT} * ${CONTACTLAB_TEST_TIME_SCALE}")
+endmacro()
+
+function(contactlab_add_gtest name)
+  cmake_parse_arguments(ARG "" "SOURCE;TIMEOUT" "LIBS;LABELS;ENVIRONMENT;PROPERTIES" ${ARGN})
+  _contactlab_test_executable(${name})
+  target_link_libraries(${name} PRIVATE GTest::gtest_main)
   gtest_discover_tests(${name} DISCOVERY_TIMEOUT 60 PROPERTIES TIMEOUT ${timeout} ${ARG_PROPERTIES})
   # gtest_discover_tests splits every property value at ';', so a second label or a second
   # variable would become a property name and shift the rest. The list-valued properties are
@@ -62,17 +70,8 @@ endif()
 
 function(contactlab_add_mpi_test name)
   cmake_parse_arguments(ARG "" "SOURCE;TIMEOUT" "LIBS;RANKS" ${ARGN})
-  if(NOT ARG_SOURCE)
-    set(ARG_SOURCE ${name}.cpp)
-  endif()
-  if(NOT ARG_TIMEOUT)
-    set(ARG_TIMEOUT 120)
-  endif()
-  add_executable(${name} ${ARG_SOURCE})
-  target_link_libraries(${name} PRIVATE ${ARG_LIBS} contactlab::flags GTest::gtest MPI::MPI_CXX)
-  target_include_directories(${name} PRIVATE ${CMAKE_CURRENT_SOURCE_DIR}
-                                             ${PROJECT_SOURCE_DIR}/tests/common)
-  math(EXPR timeout "${ARG_TIMEOUT} * ${CONTACTLAB_TEST_TIME_SCALE}")
+  _contactlab_test_executable(${name})
+  target_link_libraries(${name} PRIVATE GTest::gtest MPI::MPI_CXX)
   foreach(ranks ${ARG_RANKS})
     add_test(NAME ${name}_np${ranks}
              COMMAND ${MPIEXEC_EXECUTABLE} ${MPIEXEC_NUMPROC_FLAG} ${ranks} ${CONTACTLAB_MPIEXEC_FLAGS}
