@@ -23,6 +23,20 @@ struct Subcommand {
   std::function<int()> run;
 };
 
+// The --mpi, --block and --halo options detect and tune share (the MPI modes, detect_mpi.hpp).
+struct MpiCliOptions {
+  std::string mode;  // replicated or decomposed; empty: no MPI (whether or not under mpirun)
+  std::uint32_t block = 200;
+  double halo = 0.0;
+  // `mode_help` says what --mpi does in this command.
+  void add_to(CLI::App& app, const std::string& mode_help) {
+    app.add_option("--mpi", mode, mode_help);
+    app.add_option("--block", block, "--mpi replicated: block size of the block-cyclic deal");
+    app.add_option("--halo", halo,
+                   "--mpi decomposed: halo width (default D, or the largest diameter)");
+  }
+};
+
 // One per file, registered by main in this order (the order of `contactlab --help`).
 Subcommand add_scene_command(CLI::App& app);
 Subcommand add_detect_command(CLI::App& app, const std::string& command_line);

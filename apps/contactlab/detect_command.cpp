@@ -33,9 +33,7 @@ struct DetectCommand {
   std::string contacts_out_;
   std::string json_out_;
   std::string command_line_;
-  std::string mpi_;  // empty: no MPI (the default, whether or not under mpirun)
-  std::uint32_t block_ = 200;
-  double halo_ = 0.0;
+  MpiCliOptions mpi_;
   std::vector<CLI::Option*> repetition_options_;  // --mpi runs once: these must not be given
 
   void add_to(CLI::App& sub);
@@ -69,11 +67,8 @@ void DetectCommand::add_to(CLI::App& sub) {
       "simulate caches under valgrind: host, fx10, or custom:L1SIZE,WAYS,LINE:L2SIZE,WAYS,LINE");
   sub.add_option("--contacts-out", contacts_out_, "CSV of contacts i,j (i < j)");
   sub.add_option("--json", json_out_, "result file (docs/result-schema.md)");
-  sub.add_option("--mpi", mpi_,
-                 "run over the MPI processes (under mpirun): replicated (the paper) or decomposed");
-  sub.add_option("--block", block_, "--mpi replicated: block size of the block-cyclic deal");
-  sub.add_option("--halo", halo_,
-                 "--mpi decomposed: halo width (default D, or the largest diameter)");
+  mpi_.add_to(sub,
+              "run over the MPI processes (under mpirun): replicated (the paper) or decomposed");
 }
 
 // What --mpi cannot combine with (it runs once, without counters).
@@ -140,12 +135,10 @@ void print_run(const tn::RunRecord& run, std::size_t particles) {
 }
 
 int DetectCommand::run() const {
-  if (!mpi_.empty()) {
+  if (!mpi_.mode.empty()) {
 #ifdef CONTACTLAB_HAVE_MPI
     MpiDetectRequest request;
-    request.mode = mpi_;
-    request.block = block_;
-    request.halo = halo_;
+    request.mpi = mpi_;
     request.scene = &scene_;
     request.variant = variant_;
     request.cache_file = cache_file_;
@@ -156,7 +149,7 @@ int DetectCommand::run() const {
     request.check_options = [this] { check_mpi(); };
     return run_detect_mpi(request);
 #else
-    throw InputError("this contactlab was built without MPI (--mpi " + mpi_ + ")");
+    throw InputError("this contactlab was built without MPI (--mpi " + mpi_.mode + ")");
 #endif
   }
   check();

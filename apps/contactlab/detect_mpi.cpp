@@ -62,7 +62,7 @@ tn::RunRecord make_record(const mpi::MpiRun& run, const MpiDetectRequest& reques
   tn::MpiRecord m;
   m.mode = std::string(mpi::to_string(run.mode));
   m.ranks = run.ranks;
-  m.block = run.mode == mpi::Mode::kReplicated ? request.block : 0;
+  m.block = run.mode == mpi::Mode::kReplicated ? request.mpi.block : 0;
   m.halo_width = run.mode == mpi::Mode::kDecomposed ? run.halo_width : 0.0;
   for (const mpi::RankReport& r : run.all) {
     setup = std::max(setup, r.registration_s);
@@ -189,9 +189,9 @@ int run_detect_mpi(const MpiDetectRequest& request) {
     OpenedSource opened;
     mpi::run_checked(comm, [&] {
       request.check_options();
-      options.mode = mpi::parse_mode(request.mode);
-      options.block = request.block;
-      options.halo = request.halo;
+      options.mode = mpi::parse_mode(request.mpi.mode);
+      options.block = request.mpi.block;
+      options.halo = request.mpi.halo;
       options.contacts_out = request.contacts_out;
       if (!automatic) variant = parse_variant(request.variant);
       if (!request.json_out.empty() && rank == 0) check_writable(request.json_out);
@@ -231,9 +231,9 @@ int run_tune_mpi(const MpiTuneRequest& request) {
     mpi::run_checked(comm, [&] {
       request.check_options();
       tune_options = request.options();
-      options.mode = mpi::parse_mode(request.mode);
-      options.block = request.block;
-      options.halo = request.halo;
+      options.mode = mpi::parse_mode(request.mpi.mode);
+      options.block = request.mpi.block;
+      options.halo = request.mpi.halo;
       if (!request.json_out.empty() && rank == 0) check_writable(request.json_out);
       open_source(*request.scene, options.mode, opened);
     });

@@ -12,9 +12,7 @@
 namespace contactlab::cli {
 
 struct MpiDetectRequest {
-  std::string mode;  // replicated or decomposed
-  std::uint32_t block = 200;
-  double halo = 0.0;
+  MpiCliOptions mpi;
   const SceneOptions* scene = nullptr;
   std::string variant;     // or auto: each rank's part tuned (mpi_tuning.hpp)
   std::string cache_file;  // tuning cache for auto
@@ -32,9 +30,7 @@ int run_detect_mpi(const MpiDetectRequest& request);
 
 // `tune --mpi`: what the tune command hands to its MPI path.
 struct MpiTuneRequest {
-  std::string mode;
-  std::uint32_t block = 200;
-  double halo = 0.0;
+  MpiCliOptions mpi;
   const SceneOptions* scene = nullptr;
   std::string cache_file;
   std::string json_out;

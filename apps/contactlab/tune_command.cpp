@@ -32,9 +32,7 @@ struct TuneCommand {
   int exhaustive_rounds_ = tn::TuneOptions{}.exhaustive_rounds;
   int verify_rounds_ = tn::TuneOptions{}.verify_rounds;
   std::string command_line_;
-  std::string mpi_;  // empty: no MPI (the default, whether or not under mpirun)
-  std::uint32_t block_ = 200;
-  double halo_ = 0.0;
+  MpiCliOptions mpi_;
   DemTuneRequest dem_;  // --dem: tune the DEM force pass instead of detection
 
   void add_to(CLI::App& sub);
@@ -62,11 +60,8 @@ void TuneCommand::add_to(CLI::App& sub) {
   sub.add_option("--verify-rounds", verify_rounds_,
                  "rounds of the final verification (every choice timed once per round)")
       ->check(CLI::PositiveNumber);
-  sub.add_option("--mpi", mpi_,
-                 "tune each MPI rank's part (under mpirun): replicated (the paper) or decomposed");
-  sub.add_option("--block", block_, "--mpi replicated: block size of the block-cyclic deal");
-  sub.add_option("--halo", halo_,
-                 "--mpi decomposed: halo width (default D, or the largest diameter)");
+  mpi_.add_to(sub,
+              "tune each MPI rank's part (under mpirun): replicated (the paper) or decomposed");
   sub.add_option("--dem", dem_.config,
                  "tune the DEM force pass of this config (exhaustive over the force variants)");
   sub.add_option("--restart", dem_.restart, "--dem: start from this checkpoint of the config");
@@ -125,12 +120,10 @@ int TuneCommand::run() const {
     request.json_out = json_out_;
     return tune_dem(request);
   }
-  if (!mpi_.empty()) {
+  if (!mpi_.mode.empty()) {
 #ifdef CONTACTLAB_HAVE_MPI
     MpiTuneRequest request;
-    request.mode = mpi_;
-    request.block = block_;
-    request.halo = halo_;
+    request.mpi = mpi_;
     request.scene = &scene_;
     request.cache_file = cache_file_;
     request.json_out = json_out_;
@@ -141,7 +134,7 @@ int TuneCommand::run() const {
     request.print = print_report;
     return run_tune_mpi(request);
 #else
-    throw InputError("this contactlab was built without MPI (--mpi " + mpi_ + ")");
+    throw InputError("this contactlab was built without MPI (--mpi " + mpi_.mode + ")");
 #endif
   }
   check();
