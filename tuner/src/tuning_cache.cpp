@@ -52,6 +52,19 @@ struct CachedChoice {
   double detect_s = 0.0;
 };
 
+// A calibration as the cache stores it, and back (the cache's copy says where it came from).
+CachedCalibration to_cached(const Calibration& c) {
+  return {kCostModelVersion, c.seconds, c.threads, c.structures};
+}
+Calibration from_cached(const CachedCalibration& cached) {
+  Calibration c;
+  c.source = "cache";
+  c.seconds = cached.seconds;
+  c.threads = cached.threads;
+  c.structures = cached.structures;
+  return c;
+}
+
 // Calibrations stay raw JSON in the document: those of other machines and builds, or of another
 // cost model (other constants), are kept as they are and never read; only this machine's entry
 // of the current cost model is read strictly, when it is looked up.
@@ -160,19 +173,12 @@ std::optional<Calibration> TuningCache::calibration() const {
       it->value("cost_model_version", 1) != kCostModelVersion) {
     return std::nullopt;
   }
-  const auto cached = read_entry<CachedCalibration>(path_, *it, "$.calibrations." + key);
-  Calibration c;
-  c.source = "cache";
-  c.seconds = cached.seconds;
-  c.threads = cached.threads;
-  c.structures = cached.structures;
-  return c;
+  return from_cached(read_entry<CachedCalibration>(path_, *it, "$.calibrations." + key));
 }
 
 void TuningCache::store_calibration(const Calibration& calibration) {
   json document = load();
-  document["calibrations"][machine_key()] = to_json_value(CachedCalibration{
-      kCostModelVersion, calibration.seconds, calibration.threads, calibration.structures});
+  document["calibrations"][machine_key()] = to_json_value(to_cached(calibration));
   save(document);
 }
 
@@ -194,19 +200,11 @@ void TuningCache::store_choice(const SceneRecord& scene, double diameter, int th
 }
 
 std::string TuningCache::calibration_text(const Calibration& calibration) {
-  return to_json_value(CachedCalibration{kCostModelVersion, calibration.seconds,
-                                         calibration.threads, calibration.structures})
-      .dump();
+  return to_json_value(to_cached(calibration)).dump();
 }
 
 Calibration TuningCache::calibration_from_text(const std::string& text) {
-  const auto cached = read_entry<CachedCalibration>("calibration", json::parse(text), "$");
-  Calibration c;
-  c.source = "cache";
-  c.seconds = cached.seconds;
-  c.threads = cached.threads;
-  c.structures = cached.structures;
-  return c;
+  return from_cached(read_entry<CachedCalibration>("calibration", json::parse(text), "$"));
 }
 
 }  // namespace contactlab::tuner
