@@ -49,6 +49,12 @@ TEST(DemForceVariant, BadTextAndBrokenRulesAreInputErrors) {
   EXPECT_NE(message("ordered/dynamic,4").find("static block partition"), std::string::npos);
   EXPECT_NE(message("atomic/static/walls=serial/update=fused").find("cannot be fused"),
             std::string::npos);
+  // Per-thread and atomic sums are complete only after every pair: nothing to fuse into.
+  EXPECT_NE(message("per-thread/dynamic,4/update=fused").find("needs ordered or full-list"),
+            std::string::npos);
+  EXPECT_NE(message("atomic/static/update=fused").find("needs ordered or full-list"),
+            std::string::npos);
+  EXPECT_EQ(message("full-list/dynamic,4/update=fused"), "accepted");
 }
 
 std::vector<double> run_variant(const ForceVariant& variant, int threads, int steps) {
@@ -71,10 +77,37 @@ TEST(DemForceVariant, OrderedIsBitIdenticalWhereverWallsAndUpdateRun) {
   }
 }
 
+// The full list computes each pair once per side and sums a particle's outputs in the ordered
+// pass's order with the same arithmetic: the same bits, whatever the schedule, thread count,
+// update or walls placement, also with rolling resistance and through neighbour-list rebuilds.
+TEST(DemForceVariant, FullListIsBitIdenticalToOrderedForAnyScheduleAndThreadCount) {
+  const std::vector<double> reference = run_variant(ForceVariant{}, 1, 600);
+  for (const char* text : {"full-list/static", "full-list/dynamic,1",
+                           "full-list/guided,2/update=fused", "full-list/static,3/walls=serial"}) {
+    EXPECT_TRUE(thread_count_invariant(parse_force_variant(text))) << text;
+    for (const int threads : {1, 3}) {
+      EXPECT_TRUE(
+          test::bitwise_equal(reference, run_variant(parse_force_variant(text), threads, 600)))
+          << text << " at " << threads << " threads";
+    }
+  }
+  auto rolling = [](const char* text, int threads) {
+    auto [settings, particles] = test::small_bed();
+    settings.law.rolling_friction = 0.05;
+    settings.force_variant = parse_force_variant(text);
+    settings.threads = threads;
+    Engine engine(settings, particles);
+    engine.run_steps(400);
+    EXPECT_GT(engine.rebuilds(), 1u);
+    return test::state_by_id(engine);
+  };
+  EXPECT_TRUE(test::bitwise_equal(rolling("ordered/static", 1), rolling("full-list/dynamic,2", 2)));
+}
+
 TEST(DemForceVariant, SharedAccumulationsMatchOrderedOnOneThreadAndStayCloseOnSeveral) {
   const std::vector<double> reference = run_variant(ForceVariant{}, 1, 600);
-  for (const char* text : {"per-thread/static", "per-thread/dynamic,4/update=fused",
-                           "atomic/guided,2", "per-thread/dynamic,1/walls=serial"}) {
+  for (const char* text : {"per-thread/static", "per-thread/dynamic,4", "atomic/guided,2",
+                           "per-thread/dynamic,1/walls=serial"}) {
     const ForceVariant variant = parse_force_variant(text);
     // One thread, rows in order: the same sums in the same order as ordered.
     if (variant.schedule.kind == ScheduleKind::kStatic) {

@@ -344,6 +344,12 @@ void Engine::compute_forces(bool final_kick) {
   const ForceVariant& variant = settings_.force_variant;
   const bool ordered = variant.accumulation == Accumulation::kOrdered;
   const bool atomic = variant.accumulation == Accumulation::kAtomic;
+  const bool full = variant.accumulation == Accumulation::kFullList;
+  if (full) {  // next step's springs, written by the i sides (resized only when the list is)
+    q.hx_next.resize(q.size());
+    q.hy_next.resize(q.size());
+    q.hz_next.resize(q.size());
+  }
   if (!ordered) {
     const Schedule& sc = variant.schedule;
     omp_set_schedule(sc.kind == ScheduleKind::kStatic    ? omp_sched_static
@@ -360,6 +366,10 @@ void Engine::compute_forces(bool final_kick) {
         detail::force_pass<kRolling, kClamp>(kin, n, q, c, dt, variant.fused_update,
                                              variant.serial_walls, acc, scratch, finish, walls,
                                              mark, large, bad_pair, bad_wall_particle);
+      } else if (full) {
+        detail::force_pass_full<kRolling, kClamp>(kin, n, q, c, dt, variant.fused_update,
+                                                  variant.serial_walls, acc, scratch, finish, walls,
+                                                  mark, large, bad_pair, bad_wall_particle);
       } else {
         detail::force_pass_shared<kRolling, kClamp>(kin, n, q, c, dt, atomic, variant.serial_walls,
                                                     acc, thread_acc_, scratch, finish, walls, mark,
@@ -373,9 +383,14 @@ void Engine::compute_forces(bool final_kick) {
     c.clamp ? passes.template operator()<false, true>()
             : passes.template operator()<false, false>();
   }
+  if (full) {
+    q.hx.swap(q.hx_next);
+    q.hy.swap(q.hy_next);
+    q.hz.swap(q.hz_next);
+  }
   const double t_end = omp_get_wtime();
-  // The fused ordered pass finishes particles among the pairs: all of it counts as pair forces.
-  if (ordered && variant.fused_update) phase_end[0] = phase_end[1] = phase_end[2] = t_end;
+  // A fused pass finishes particles among the pairs: all of it counts as pair forces.
+  if (variant.fused_update) phase_end[0] = phase_end[1] = phase_end[2] = t_end;
   const double t_pairs = phase_end[0];
   const double t_reduced = phase_end[1] < 0 ? t_pairs : phase_end[1];
   const double t_walls = phase_end[2] < 0 ? t_reduced : phase_end[2];

@@ -143,7 +143,7 @@ void force_pass(const double* kin, std::size_t n, PairList& q, const PairCoeffic
     blk.reserve(k1 - k0);
     std::fill(acc + kAccStride * first, acc + kAccStride * last, 0.0);
     pack_rows<kRolling>(kin, q, first, last, blk, acc);
-    pair_law<kRolling, kClamp>(q, c, dt, k0, k1, blk);
+    pair_law<kRolling, kClamp>(c, dt, k1 - k0, blk, SpringView::in_place(q, k0));
     accumulate_block<kRolling>(kin, q, k0, k1, blk, b, acc, large_here, bad_here);
     for (; next + lag < last; ++next) finish(next, true, large_here, bad_wall_here);
   }
@@ -162,6 +162,20 @@ void force_pass(const double* kin, std::size_t n, PairList& q, const PairCoeffic
   for (; next < e; ++next) finish(next, !serial_walls, large_here, bad_wall_here);
   combine_counts(large_here, bad_here, large, bad_pair);
   combine_counts(0, bad_wall_here, large, bad_wall);
+}
+
+// The update (finish(a, with_walls, ...)) over the same blocks of particles as the pairs, by
+// the variant's schedule (a chunk of k is k blocks in both loops; per particle, dynamic,1
+// would pay a scheduling round trip per particle).
+template <class Finish>
+inline void update_blocks(std::size_t n, bool serial_walls, Finish& finish,
+                          std::uint64_t& large_here, std::uint32_t& bad_wall_here) {
+  const std::size_t blocks = (n + kRowsPerBlock - 1) / kRowsPerBlock;
+#pragma omp for schedule(runtime)
+  for (std::size_t block = 0; block < blocks; ++block) {
+    const std::size_t first = block * kRowsPerBlock, last = std::min(n, first + kRowsPerBlock);
+    for (std::size_t a = first; a < last; ++a) finish(a, !serial_walls, large_here, bad_wall_here);
+  }
 }
 
 // Adds a value to a shared sum: atomically (kAtomic: threads may add to the same particle)
@@ -245,7 +259,7 @@ void force_pass_shared(const double* kin, std::size_t n, PairList& q, const Pair
     const std::size_t k0 = q.rows[first], k1 = q.rows[last];
     blk.reserve(k1 - k0);
     pack_rows<kRolling>(kin, q, first, last, blk, target);
-    pair_law<kRolling, kClamp>(q, c, dt, k0, k1, blk);
+    pair_law<kRolling, kClamp>(c, dt, k1 - k0, blk, SpringView::in_place(q, k0));
     if (atomic) {
       accumulate_shared<kRolling, true>(kin, q, first, last, blk, target, large_here, bad_here);
     } else {
@@ -268,12 +282,104 @@ void force_pass_shared(const double* kin, std::size_t n, PairList& q, const Pair
     for (std::size_t a = 0; a < n; ++a) walls(a, large_here, bad_wall_here);
     mark(Phase::kWalls);
   }
-  // The update over the same blocks of particles as the pairs (a chunk of k is k blocks in
-  // both loops; per particle, dynamic,1 would pay a scheduling round trip per particle).
-#pragma omp for schedule(runtime)
+  update_blocks(n, serial_walls, finish, large_here, bad_wall_here);
+  combine_counts(large_here, bad_here, large, bad_pair);
+  combine_counts(0, bad_wall_here, large, bad_wall);
+}
+
+// The full list's i sides: each row's outputs summed in pair order into its particle's sums
+// (assigned: nothing else reaches a particle before its own row), overlaps counted (each pair
+// once: only here).
+template <bool kRolling>
+inline void accumulate_rows(const double* kin, const PairList& q, std::size_t first,
+                            std::size_t last, PairBlock& blk, double* acc, std::uint64_t& large,
+                            std::uint32_t& bad) {
+  const double* o[PairBlock::kOutputs];
+  for (int f = 0; f < PairBlock::kOutputs; ++f) o[f] = blk.out(static_cast<PairBlock::Output>(f));
+  const std::size_t k0 = q.rows[first];
+  for (std::size_t i = first; i < last; ++i) {
+    const double ri = kin[kKinStride * i + 3];
+    double sum[7] = {0, 0, 0, 0, 0, 0, 0};
+    for (std::size_t k = q.rows[i]; k < q.rows[i + 1]; ++k) {
+      const std::size_t b = k - k0;
+      large += o[PairBlock::kLarge][b] != 0.0;
+      if (o[PairBlock::kFailing][b] != 0.0) bad = std::min(bad, static_cast<std::uint32_t>(k));
+      for (int d = 0; d < 3; ++d) {
+        sum[d] += o[PairBlock::kFx + d][b];
+        sum[3 + d] -= ri * o[PairBlock::kCx + d][b];
+        if constexpr (kRolling) sum[3 + d] += o[PairBlock::kRollX + d][b];
+      }
+      sum[6] += o[PairBlock::kTouch][b];
+    }
+    std::copy(sum, sum + 7, acc + kAccStride * i);
+  }
+}
+
+// The full list's j sides: the block's packed j-side pairs (pack_pairs of j_pairs[e0 ..)),
+// subtracted from their j particle's sums in pair order, as the ordered pass does.
+template <bool kRolling>
+inline void accumulate_j_sides(const double* kin, const PairList& q, std::size_t first,
+                               std::size_t last, PairBlock& blk, double* acc) {
+  const double* o[PairBlock::kOutputs];
+  for (int f = 0; f < PairBlock::kOutputs; ++f) o[f] = blk.out(static_cast<PairBlock::Output>(f));
+  const std::size_t e0 = q.j_offsets[first];
+  for (std::size_t a = first; a < last; ++a) {
+    const double r = kin[kKinStride * a + 3];
+    double* aa = acc + kAccStride * a;
+    for (std::size_t e = q.j_offsets[a]; e < q.j_offsets[a + 1]; ++e) {
+      const std::size_t b = e - e0;
+      for (int d = 0; d < 3; ++d) {
+        aa[d] -= o[PairBlock::kFx + d][b];
+        aa[3 + d] -= r * o[PairBlock::kCx + d][b];
+        if constexpr (kRolling) aa[3 + d] -= o[PairBlock::kRollX + d][b];
+      }
+      aa[6] += o[PairBlock::kTouch][b];
+    }
+  }
+}
+
+// The force pass of the full list (each pair computed twice, once for each side): a block of
+// particles computes its own rows (springs of this step in, next step's out to
+// PairList::*_next) and then its j sides again from the springs of this step, and writes only
+// its own particles' sums: no shared writes, so any schedule, and each particle's sums are its
+// own row, then its j sides in pair order, with the same arithmetic as the ordered pass:
+// bit-identical to it for any thread count and schedule. update=fused finishes the block's
+// particles at once. The caller swaps the springs in after the pass.
+template <bool kRolling, bool kClamp, class Finish, class Walls, class Mark>
+void force_pass_full(const double* kin, std::size_t n, PairList& q, const PairCoefficients& c,
+                     double dt, bool fused, bool serial_walls, double* acc,
+                     std::vector<double>& scratch, Finish& finish, Walls& walls, Mark& mark,
+                     std::uint64_t& large, std::uint32_t& bad_pair, std::uint32_t& bad_wall) {
+  std::uint64_t large_here = 0;
+  std::uint32_t bad_here = UINT32_MAX, bad_wall_here = UINT32_MAX;
+  PairBlock blk(scratch);
+  const std::size_t blocks = (n + kRowsPerBlock - 1) / kRowsPerBlock;
+#pragma omp for schedule(runtime) nowait
   for (std::size_t block = 0; block < blocks; ++block) {
     const std::size_t first = block * kRowsPerBlock, last = std::min(n, first + kRowsPerBlock);
-    for (std::size_t a = first; a < last; ++a) finish(a, !serial_walls, large_here, bad_wall_here);
+    const std::size_t k0 = q.rows[first], k1 = q.rows[last];
+    const std::size_t e0 = q.j_offsets[first], e1 = q.j_offsets[last];
+    blk.reserve(std::max(k1 - k0, e1 - e0));
+    pack_rows<kRolling>(kin, q, first, last, blk, acc);
+    pair_law<kRolling, kClamp>(c, dt, k1 - k0, blk, SpringView::to_next(q, k0));
+    accumulate_rows<kRolling>(kin, q, first, last, blk, acc, large_here, bad_here);
+    pack_pairs<kRolling>(kin, q, q.j_pairs.data() + e0, e1 - e0, blk);
+    pair_law<kRolling, kClamp>(c, dt, e1 - e0, blk, SpringView::gathered(blk));
+    accumulate_j_sides<kRolling>(kin, q, first, last, blk, acc);
+    if (fused) {
+      for (std::size_t a = first; a < last; ++a) finish(a, true, large_here, bad_wall_here);
+    }
+  }
+#pragma omp barrier
+  mark(Phase::kPairs);
+  mark(Phase::kReduction);
+  if (!fused) {
+    if (serial_walls) {
+#pragma omp single
+      for (std::size_t a = 0; a < n; ++a) walls(a, large_here, bad_wall_here);
+      mark(Phase::kWalls);
+    }
+    update_blocks(n, serial_walls, finish, large_here, bad_wall_here);
   }
   combine_counts(large_here, bad_here, large, bad_pair);
   combine_counts(0, bad_wall_here, large, bad_wall);

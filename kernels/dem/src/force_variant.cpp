@@ -8,10 +8,11 @@
 namespace contactlab::dem {
 namespace {
 
-constexpr std::array<std::pair<Accumulation, std::string_view>, 3> kAccumulations{
+constexpr std::array<std::pair<Accumulation, std::string_view>, 4> kAccumulations{
     {{Accumulation::kOrdered, "ordered"},
      {Accumulation::kPerThread, "per-thread"},
-     {Accumulation::kAtomic, "atomic"}}};
+     {Accumulation::kAtomic, "atomic"},
+     {Accumulation::kFullList, "full-list"}}};
 
 std::vector<std::string_view> split(std::string_view text, char separator) {
   std::vector<std::string_view> parts;
@@ -52,7 +53,7 @@ ForceVariant parse_force_variant(std::string_view text) {
                                   [&](const auto& entry) { return entry.second == parts[0]; });
   if (found == kAccumulations.end()) {
     throw InputError(quoted + ": accumulation '" + std::string(parts[0]) +
-                     "' is not one of ordered, per-thread, atomic");
+                     "' is not one of ordered, per-thread, atomic, full-list");
   }
   variant.accumulation = found->first;
   variant.schedule = parse_schedule(parts[1]);
@@ -82,11 +83,17 @@ std::optional<std::string_view> broken_rule(const ForceVariant& variant) {
   if (variant.serial_walls && variant.fused_update) {
     return "serial walls cannot be fused into the update (drop update=fused)";
   }
+  if (variant.fused_update && (variant.accumulation == Accumulation::kPerThread ||
+                               variant.accumulation == Accumulation::kAtomic)) {
+    return "update=fused needs ordered or full-list accumulation (per-thread and atomic sums are "
+           "complete only after every pair)";
+  }
   return std::nullopt;
 }
 
 bool thread_count_invariant(const ForceVariant& variant) {
-  return variant.accumulation == Accumulation::kOrdered;
+  return variant.accumulation == Accumulation::kOrdered ||
+         variant.accumulation == Accumulation::kFullList;
 }
 
 std::vector<ForceVariant> force_variants(const std::vector<int>& chunks) {

@@ -81,6 +81,9 @@ struct PairBlock {
     kDwy,
     kDwz,
     kRprod,
+    kHx,  // the tangential spring, gathered (pack_pairs: pairs out of row order)
+    kHy,
+    kHz,
     kInputs
   };
   // Force on i [N], n x F_t [N], 1 if touching with a force, rolling torque on i [N m], 1 if
@@ -116,30 +119,69 @@ struct PairBlock {
   double* out(Output f) { return data.data() + (std::size_t{kInputs} + f) * capacity; }
 };
 
+// What the pack reads of a pair's i particle, held in registers over its row.
+struct PackedI {
+  double x, y, z, r, vx, vy, vz, m, wx, wy, wz;
+  explicit PackedI(const double* ki)
+      : x(ki[0]),
+        y(ki[1]),
+        z(ki[2]),
+        r(ki[3]),
+        vx(ki[4]),
+        vy(ki[5]),
+        vz(ki[6]),
+        m(ki[7]),
+        wx(ki[8]),
+        wy(ki[9]),
+        wz(ki[10]) {}
+};
+
+// Pair k's inputs into the block at b, seen from its i side (the same operations, in the same
+// order, as the law on whole particles, so nothing is rounded differently).
+// The block's input fields, looked up once per pack.
+struct PackTargets {
+  double* f[PairBlock::kInputs];
+  explicit PackTargets(PairBlock& blk) {
+    for (int k = 0; k < PairBlock::kInputs; ++k) f[k] = blk.in(static_cast<PairBlock::Input>(k));
+  }
+};
+
+template <bool kRolling>
+inline void pack_pair(const double* kin, const PairList& q, const PackedI& pi, std::size_t k,
+                      std::size_t b, const PackTargets& t) {
+  const double* kj = kin + kKinStride * q.j[k];
+  const auto& sh = q.shift[q.image[k]];
+  const double rj = kj[3];
+  t.f[PairBlock::kDx][b] = pi.x - kj[0] - sh[0];
+  t.f[PairBlock::kDy][b] = pi.y - kj[1] - sh[1];
+  t.f[PairBlock::kDz][b] = pi.z - kj[2] - sh[2];
+  t.f[PairBlock::kRr][b] = pi.r + rj;
+  t.f[PairBlock::kRmin][b] = rj < pi.r ? rj : pi.r;
+  t.f[PairBlock::kMi][b] = pi.m;
+  t.f[PairBlock::kMj][b] = kj[7];
+  t.f[PairBlock::kDvx][b] = pi.vx - kj[4];
+  t.f[PairBlock::kDvy][b] = pi.vy - kj[5];
+  t.f[PairBlock::kDvz][b] = pi.vz - kj[6];
+  t.f[PairBlock::kSx][b] = pi.r * pi.wx + rj * kj[8];
+  t.f[PairBlock::kSy][b] = pi.r * pi.wy + rj * kj[9];
+  t.f[PairBlock::kSz][b] = pi.r * pi.wz + rj * kj[10];
+  if constexpr (kRolling) {
+    t.f[PairBlock::kDwx][b] = pi.wx - kj[8];
+    t.f[PairBlock::kDwy][b] = pi.wy - kj[9];
+    t.f[PairBlock::kDwz][b] = pi.wz - kj[10];
+    t.f[PairBlock::kRprod][b] = pi.r * rj;
+  }
+}
+
 // Pack: the rows [first, last) (pairs [rows[first], rows[last])), i's values in registers,
-// j's from its kin block, into the block's inputs (the same operations, in the same order, as
-// the law on whole particles, so nothing is rounded differently).
+// j's from its kin block, into the block's inputs.
 template <bool kRolling>
 inline void pack_rows(const double* kin, const PairList& q, std::size_t first, std::size_t last,
-                      PairBlock& blk, double* acc) {
+                      PairBlock& blk, const double* acc) {
   const std::size_t k0 = q.rows[first];
-  double* dx = blk.in(PairBlock::kDx);
-  double* dy = blk.in(PairBlock::kDy);
-  double* dz = blk.in(PairBlock::kDz);
-  double* rr = blk.in(PairBlock::kRr);
-  double* rmin = blk.in(PairBlock::kRmin);
-  double* mi = blk.in(PairBlock::kMi);
-  double* mj = blk.in(PairBlock::kMj);
-  double* dvx = blk.in(PairBlock::kDvx);
-  double* dvy = blk.in(PairBlock::kDvy);
-  double* dvz = blk.in(PairBlock::kDvz);
-  double* sx = blk.in(PairBlock::kSx);
-  double* sy = blk.in(PairBlock::kSy);
-  double* sz = blk.in(PairBlock::kSz);
+  const PackTargets t(blk);
   for (std::size_t i = first; i < last; ++i) {
-    const double* ki = kin + kKinStride * i;
-    const double xi = ki[0], yi = ki[1], zi = ki[2], ri = ki[3], vxi = ki[4], vyi = ki[5],
-                 vzi = ki[6], m = ki[7], wxi = ki[8], wyi = ki[9], wzi = ki[10];
+    const PackedI pi(kin + kKinStride * i);
     for (std::size_t k = q.rows[i]; k < q.rows[i + 1]; ++k) {
       // Partners lie up to max_span particles back (L2 or beyond, out of reach of the hardware
       // prefetcher): fetch the kin block and the sums of the partner a few pairs ahead.
@@ -149,41 +191,64 @@ inline void pack_rows(const double* kin, const PairList& q, std::size_t first, s
         __builtin_prefetch(kin + kKinStride * ahead + kKinStride - 1);
         __builtin_prefetch(acc + kAccStride * ahead, 1);
       }
-      const double* kj = kin + kKinStride * q.j[k];
-      const auto& sh = q.shift[q.image[k]];
-      const std::size_t b = k - k0;
-      const double rj = kj[3];
-      dx[b] = xi - kj[0] - sh[0];
-      dy[b] = yi - kj[1] - sh[1];
-      dz[b] = zi - kj[2] - sh[2];
-      rr[b] = ri + rj;
-      rmin[b] = rj < ri ? rj : ri;
-      mi[b] = m;
-      mj[b] = kj[7];
-      dvx[b] = vxi - kj[4];
-      dvy[b] = vyi - kj[5];
-      dvz[b] = vzi - kj[6];
-      sx[b] = ri * wxi + rj * kj[8];
-      sy[b] = ri * wyi + rj * kj[9];
-      sz[b] = ri * wzi + rj * kj[10];
-      if constexpr (kRolling) {
-        blk.in(PairBlock::kDwx)[b] = wxi - kj[8];
-        blk.in(PairBlock::kDwy)[b] = wyi - kj[9];
-        blk.in(PairBlock::kDwz)[b] = wzi - kj[10];
-        blk.in(PairBlock::kRprod)[b] = ri * rj;
-      }
+      pack_pair<kRolling>(kin, q, pi, k, k - k0, t);
     }
   }
 }
 
-// The law on the packed pairs [k0, k1), each independent of the others, on SIMD lanes (masks
-// instead of branches): outputs zero while apart, springs updated in place. With
-// -ffp-contract=off a lane computes exactly what scalar code would, so where a block boundary
+// Pack: the pairs pairs[0 .. count) in that order (e.g. a particle's j sides, for the full
+// list), each seen from its i side as in pack_rows, with its tangential spring gathered into
+// the block (kHx..kHz): pair_law then reads and writes the block's copy, not the list's.
+template <bool kRolling>
+inline void pack_pairs(const double* kin, const PairList& q, const std::uint32_t* pairs,
+                       std::size_t count, PairBlock& blk) {
+  const PackTargets t(blk);
+  double* hx = t.f[PairBlock::kHx];
+  double* hy = t.f[PairBlock::kHy];
+  double* hz = t.f[PairBlock::kHz];
+  for (std::size_t b = 0; b < count; ++b) {
+    const std::uint32_t k = pairs[b];
+    if (b + kPartnerAhead < count) {
+      __builtin_prefetch(kin + kKinStride * q.i[pairs[b + kPartnerAhead]]);
+      __builtin_prefetch(kin + kKinStride * q.i[pairs[b + kPartnerAhead]] + kKinStride - 1);
+    }
+    pack_pair<kRolling>(kin, q, PackedI(kin + kKinStride * q.i[k]), k, b, t);
+    hx[b] = q.hx[k];
+    hy[b] = q.hy[k];
+    hz[b] = q.hz[k];
+  }
+}
+
+// Where pair_law reads the block's tangential springs and writes them back: the list's own
+// (in place, in_* == out_*), the list's into its next-step copy (the full list: the springs
+// of this step stay readable for the j sides), or a gathered copy in the block.
+struct SpringView {
+  const double *in_x, *in_y, *in_z;
+  double *out_x, *out_y, *out_z;
+  static SpringView in_place(PairList& q, std::size_t k0) {
+    return {q.hx.data() + k0, q.hy.data() + k0, q.hz.data() + k0,
+            q.hx.data() + k0, q.hy.data() + k0, q.hz.data() + k0};
+  }
+  static SpringView to_next(PairList& q, std::size_t k0) {
+    return {q.hx.data() + k0,      q.hy.data() + k0,      q.hz.data() + k0,
+            q.hx_next.data() + k0, q.hy_next.data() + k0, q.hz_next.data() + k0};
+  }
+  static SpringView gathered(PairBlock& blk) {
+    double* x = blk.in(PairBlock::kHx);
+    double* y = blk.in(PairBlock::kHy);
+    double* z = blk.in(PairBlock::kHz);
+    return {x, y, z, x, y, z};
+  }
+};
+
+// The law on the block's `count` packed pairs, each independent of the others, on SIMD lanes (masks
+// instead of branches): outputs zero while apart, springs read and written where `springs` says.
+// With -ffp-contract=off a lane computes exactly what scalar code would, so where a block boundary
 // falls (it moves with the thread count) changes no bit. Overlaps above 1 % are counted into
 // `large`, the first above 10 % goes to `bad` (both exact).
 template <bool kRolling, bool kClamp>
-inline void pair_law(PairList& q, const PairCoefficients& c, double dt, std::size_t k0,
-                     std::size_t k1, PairBlock& blk) {
+inline void pair_law(const PairCoefficients& c, double dt, std::size_t count, PairBlock& blk,
+                     const SpringView& springs) {
   const double* __restrict dx = blk.in(PairBlock::kDx);
   const double* __restrict dy = blk.in(PairBlock::kDy);
   const double* __restrict dz = blk.in(PairBlock::kDz);
@@ -211,16 +276,19 @@ inline void pair_law(PairList& q, const PairCoefficients& c, double dt, std::siz
   double* __restrict roll_x = blk.out(PairBlock::kRollX);
   double* __restrict roll_y = blk.out(PairBlock::kRollY);
   double* __restrict roll_z = blk.out(PairBlock::kRollZ);
-  double* __restrict hx = q.hx.data() + k0;
-  double* __restrict hy = q.hy.data() + k0;
-  double* __restrict hz = q.hz.data() + k0;
+  // Not __restrict: in place, in and out are the same array (omp simd needs no such promise).
+  const double* hx_in = springs.in_x;
+  const double* hy_in = springs.in_y;
+  const double* hz_in = springs.in_z;
+  double* hx = springs.out_x;
+  double* hy = springs.out_y;
+  double* hz = springs.out_z;
   const double k_abs = c.k_abs, k_per_mass = c.k_per_mass, c_per_mass = c.c_per_mass;
   const double kt_ratio = c.kt_ratio, ct_ratio = c.ct_ratio, mu = c.mu, mu_roll = c.mu_roll;
   double* __restrict out_large = blk.out(PairBlock::kLarge);
   double* __restrict out_failing = blk.out(PairBlock::kFailing);
-  const auto count = static_cast<std::uint32_t>(k1 - k0);
 #pragma omp simd
-  for (std::uint32_t b = 0; b < count; ++b) {
+  for (std::uint32_t b = 0; b < static_cast<std::uint32_t>(count); ++b) {
     const double rr = rr_in[b];
     const double rsq = dx[b] * dx[b] + dy[b] * dy[b] + dz[b] * dz[b];
     const bool touch = rsq < rr * rr;
@@ -239,7 +307,7 @@ inline void pair_law(PairList& q, const PairCoefficients& c, double dt, std::siz
     const double kn = k_abs + k_per_mass * m_star, cn = c_per_mass * m_star;
     double fn = kn * delta - cn * vn;
     if constexpr (kClamp) fn = fn < 0.0 ? 0.0 : fn;  // std::max(fn, 0.0)
-    double sxk = hx[b], syk = hy[b], szk = hz[b];
+    double sxk = hx_in[b], syk = hy_in[b], szk = hz_in[b];
     const Tangential ft = tangential(nx, ny, nz, vx - vn * nx, vy - vn * ny, vz - vn * nz, fn,
                                      kt_ratio * kn, ct_ratio * cn, mu, dt, sxk, syk, szk);
     hx[b] = touch ? sxk : 0.0;

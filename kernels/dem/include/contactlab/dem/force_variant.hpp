@@ -21,7 +21,10 @@ namespace contactlab::dem {
 // kPerThread: one force/torque array per thread, summed per particle in thread order
 // afterwards (Otsuka's report): the same result for the same thread count and schedule.
 // kAtomic: one shared array, `omp atomic` adds: the order, hence the last bits, vary run to run.
-enum class Accumulation { kOrdered, kPerThread, kAtomic };
+// kFullList: each pair computed twice, once for each side, each particle's sums written only by
+// the thread that owns it (no shared writes, any schedule): the sums of kOrdered in its order,
+// bit-identical to it for any thread count and schedule, for twice the pair work.
+enum class Accumulation { kOrdered, kPerThread, kAtomic, kFullList };
 
 struct ForceVariant {
   Accumulation accumulation = Accumulation::kOrdered;
@@ -42,14 +45,15 @@ std::string to_string(const ForceVariant& variant);
 // Throws InputError with a one-line message naming the bad part, or the rule it breaks.
 ForceVariant parse_force_variant(std::string_view text);
 // The rule between parts that `variant` breaks, or nothing: ordered accumulation needs the
-// static block partition; serial walls cannot be fused into the update.
+// static block partition; the update is fused only where a particle's sums are complete
+// before all pairs are (ordered, full list), and never with serial walls.
 std::optional<std::string_view> broken_rule(const ForceVariant& variant);
-// Whether the trajectory is the same for any thread count (kOrdered only).
+// Whether the trajectory is the same for any thread count and schedule (kOrdered, kFullList).
 bool thread_count_invariant(const ForceVariant& variant);
 
-// Every accumulation with static and, where allowed, dynamic,k and guided,k for each k in
-// `chunks`, each with separate and fused update and parallel walls, plus the report's
-// configuration (per-thread/dynamic,1 with serial walls).
+// Every accumulation with static and, where allowed, static,k, dynamic,k and guided,k for each k
+// in `chunks`, each with separate and (where allowed) fused update and parallel walls, plus the
+// report's configuration (per-thread/dynamic,1 with serial walls).
 std::vector<ForceVariant> force_variants(const std::vector<int>& chunks);
 
 }  // namespace contactlab::dem

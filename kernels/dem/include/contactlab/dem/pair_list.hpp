@@ -28,6 +28,9 @@ struct PairList {
   std::vector<std::uint32_t> i, j;  // particle indices (current order)
   std::vector<std::uint8_t> image;  // periodic image code of j
   std::vector<double> hx, hy, hz;   // tangential spring xi [m], oriented as seen from i
+  // The full list's next-step springs: its j sides recompute a pair from the springs of this
+  // step while the i side writes the new ones here (swapped in after the pass; not saved).
+  std::vector<double> hx_next, hy_next, hz_next;
   // Per pair, in pair order, written by the force pass (zero while apart), kOutStride doubles
   // a pair, one cache line: the force on i [N] (j gets minus it), n x F_t [N] (i's torque is
   // -r_i times it, j's -r_j times it), 1 if touching (else 0), unused. With rolling resistance,
