@@ -57,6 +57,9 @@ struct DemTuneRequest {
   std::uint64_t steps = 200;
   int threads = 1;
   std::string json_out;
+  bool predict_only = false;  // the calibrated model alone: no candidate timed
+  bool exhaustive = false;    // also time every candidate (ground truth)
+  int verify_rounds = 3;      // interleaved rounds over the choices, default and report's
 };
 int tune_dem(const DemTuneRequest& request);
 

@@ -4,6 +4,7 @@
 #include <fmt/core.h>
 #include <omp.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <memory>
@@ -14,7 +15,9 @@
 #include "contactlab/dem/checkpoint.hpp"
 #include "contactlab/dem/config.hpp"
 #include "contactlab/dem/discharge.hpp"
+#include "contactlab/dem/force_model.hpp"
 #include "contactlab/dem/output.hpp"
+#include "dem_start.hpp"
 #ifdef CONTACTLAB_HAVE_CAIRO
 #include "contactlab/dem/picture.hpp"
 #endif
@@ -29,6 +32,80 @@ namespace {
 
 namespace dem = contactlab::dem;
 
+// `dem run --variant auto [--retune]`: the variant the force model chooses at the start and,
+// with --retune, at every neighbour-list rebuild (no timed runs: the pair list priced with the
+// calibrated costs), and the log of which variant ran when.
+class VariantTuning {
+ public:
+  VariantTuning(const dem::ForceCosts& costs, double margin)
+      : costs_(costs), retuner_(costs, dem::force_variants({1, 4, 16}), margin) {}
+
+  void start(dem::Engine& engine) {
+    fmt::print("variant auto: force model calibrated by {} runs of {} steps ({:.1f} s)\n",
+               costs_.calibration_runs, costs_.calibration_steps, costs_.calibration_seconds);
+    decide(engine, true);
+  }
+  void after_step(dem::Engine& engine) {
+    if (engine.rebuilds() == rebuilds_seen_) return;
+    decide(engine, false);
+  }
+  void finish(const dem::Engine& engine, double wall_s) {
+    if (!log_.empty()) log_.back().end_step = engine.step_count();
+    fmt::print(
+        "variants ran ({} decisions at rebuilds, {:.3f} s of pricing, {:.2f} % of the run):\n",
+        decisions_, pricing_s_, 100.0 * pricing_s_ / std::max(wall_s, 1e-9));
+    for (const Entry& e : log_) {
+      fmt::print("  steps {:>9} - {:<9} t = {:<10.6g} {}  (predicted gain {:+.1f} %)\n",
+                 e.begin_step, e.end_step, e.time_s, dem::to_string(e.variant),
+                 100.0 * e.predicted_gain);
+    }
+  }
+  void write_log(const std::string& path) const {
+    write_file_atomically(path, [&](std::ostream& out) {
+      out << "begin_step,end_step,time_s,variant,predicted_gain\n";
+      for (const Entry& e : log_) {
+        out << fmt::format("{},{},{:.9g},{},{:.6g}\n", e.begin_step, e.end_step, e.time_s,
+                           dem::to_string(e.variant), e.predicted_gain);
+      }
+    });
+  }
+
+ private:
+  struct Entry {
+    std::uint64_t begin_step = 0, end_step = 0;
+    double time_s = 0.0;
+    dem::ForceVariant variant;
+    double predicted_gain = 0.0;
+  };
+  void decide(dem::Engine& engine, bool first) {
+    const double t0 = omp_get_wtime();
+    rebuilds_seen_ = engine.rebuilds();
+    ++decisions_;
+    // At the start every candidate may be taken (margin 0); later only a gain above the margin.
+    const dem::ForceRetuner::Decision d =
+        first ? dem::ForceRetuner(costs_, dem::force_variants({1, 4, 16}), 0.0)
+                    .decide(engine, engine.settings().force_variant)
+              : retuner_.decide(engine, engine.settings().force_variant);
+    pricing_s_ += omp_get_wtime() - t0;
+    if (!first && !d.switched) return;
+    engine.set_force_variant(d.variant);
+    if (!log_.empty()) log_.back().end_step = engine.step_count();
+    log_.push_back(
+        {engine.step_count(), engine.step_count(), engine.time_s(), d.variant, d.predicted_gain});
+    if (!first) {
+      fmt::print("step {} (t = {:.6g} s): variant -> {} (predicted gain {:+.1f} %)\n",
+                 engine.step_count(), engine.time_s(), dem::to_string(d.variant),
+                 100.0 * d.predicted_gain);
+    }
+  }
+
+  dem::ForceCosts costs_;
+  dem::ForceRetuner retuner_;
+  std::uint64_t rebuilds_seen_ = 0, decisions_ = 0;
+  double pricing_s_ = 0.0;
+  std::vector<Entry> log_;
+};
+
 struct DemRunCommand {
   std::string config_;
   int threads_ = 0;
@@ -39,6 +116,10 @@ struct DemRunCommand {
   std::string restart_;
   std::string checkpoint_;
   std::uint64_t steps_ = 0;
+  bool retune_ = false;
+  double retune_margin_ = 0.05;
+  std::uint64_t calibration_steps_ = 50;
+  std::string variant_log_;
 
   static std::string in_dir(std::string dir, const std::string& file) {
     if (!dir.empty() && dir.back() != '/') dir += '/';
@@ -50,7 +131,16 @@ struct DemRunCommand {
     dem::EngineSettings settings = config.settings;
     settings.threads = resolve_threads(threads_);
     if (settings.threads < 1) throw InputError("--threads must be >= 0");
-    if (!variant_.empty()) settings.force_variant = dem::parse_force_variant(variant_);
+    const bool auto_variant = variant_ == "auto";
+    if (!variant_.empty() && !auto_variant) {
+      settings.force_variant = dem::parse_force_variant(variant_);
+    }
+    if (retune_ && !auto_variant) throw InputError("--retune needs --variant auto");
+    if (retune_margin_ < 0) throw InputError("--retune-margin must be >= 0");
+    if (auto_variant && calibration_steps_ == 0) {
+      throw InputError("--calibration-steps must be >= 1");
+    }
+    if (!variant_log_.empty()) check_writable(variant_log_);
     const bool has_sink = settings.sink_below_z > -std::numeric_limits<double>::infinity();
     // Output paths are checked before any work.
     std::unique_ptr<dem::FrameWriter> writer;
@@ -79,6 +169,18 @@ struct DemRunCommand {
     std::string checkpoint = checkpoint_;
     if (checkpoint.empty() && !vtk_dir_.empty()) checkpoint = in_dir(vtk_dir_, "last.chk");
     if (!checkpoint.empty()) check_writable(checkpoint);
+    // --variant auto: the force model calibrated on this run's start (a few short runs from
+    // copies of it), then the variant it predicts fastest; --retune re-prices at each rebuild.
+    std::unique_ptr<VariantTuning> tuning;
+    if (auto_variant) {
+      DemStart start;
+      start.restart = restart_;
+      tuning = std::make_unique<VariantTuning>(
+          dem::calibrate_force_costs([&](const dem::ForceVariant& v,
+                                         int t) { return start.engine(config, initial, v, t); },
+                                     settings.threads, calibration_steps_),
+          retune_margin_);
+    }
     dem::Engine engine(settings, std::move(initial));
     int frame = 0;
     if (!restart_.empty()) {
@@ -115,6 +217,7 @@ struct DemRunCommand {
       if (log) log->record(engine);
     };
     if (engine.step_count() == 0) output();
+    if (tuning) tuning->start(engine);
     const double t0 = omp_get_wtime();
     const std::uint64_t first_step = engine.step_count();
     std::uint64_t particle_steps = 0;
@@ -122,6 +225,7 @@ struct DemRunCommand {
       while (engine.step_count() < total_steps) {
         particle_steps += engine.particles().size();
         engine.step();
+        if (tuning && retune_) tuning->after_step(engine);
         const bool empty = engine.particles().size() == 0;
         if ((engine.step_count() - first_step) % every == 0 || engine.step_count() == total_steps ||
             empty) {
@@ -163,6 +267,10 @@ struct DemRunCommand {
       const dem::DischargeRow row = dem::discharge_row(engine);
       fmt::print("discharged: {:.6g} kg in {} particles, {} left\n", row.discharged_kg,
                  row.discharged, row.left);
+    }
+    if (tuning) {
+      tuning->finish(engine, wall);
+      if (!variant_log_.empty()) tuning->write_log(variant_log_);
     }
     if (engine.large_overlap_count() > 0) {
       fmt::print("overlaps above 1 % of the smaller diameter: {} contact-steps\n",
@@ -244,7 +352,18 @@ Subcommand add_dem_command(CLI::App& app) {
   run_app->add_option("config", run->config_, "DEM config (JSON, docs/dem.md)")->required();
   run_app->add_option("--threads", run->threads_, "OpenMP threads (0 = OpenMP's default)");
   run_app->add_option("--variant", run->variant_,
-                      "force variant, e.g. per-thread/dynamic,4 (default ordered/static)");
+                      "force variant, e.g. per-thread/dynamic,4 (default ordered/static), or auto: "
+                      "the force model's choice (calibrated on the run's start)");
+  run_app->add_flag("--retune", run->retune_,
+                    "with --variant auto: re-price the variants at each neighbour-list rebuild "
+                    "and switch when the predicted gain exceeds the margin");
+  run_app->add_option("--retune-margin", run->retune_margin_,
+                      "predicted gain needed to switch (fraction, default 0.05)");
+  run_app->add_option("--calibration-steps", run->calibration_steps_,
+                      "--variant auto: timed steps per calibration run (50)");
+  run_app->add_option("--variant-log", run->variant_log_,
+                      "--variant auto: CSV of which variant ran when (step, time, variant, "
+                      "predicted gain)");
   run_app->add_option("--vtk", run->vtk_dir_, "write DIR/<name>.pvd, frames, energy CSV, last.chk");
   run_app->add_option("--png", run->png_dir_,
                       "write DIR/<name>_section_NNNNN.png per frame and DIR/<name>_discharge.png");

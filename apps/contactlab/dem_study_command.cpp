@@ -1,7 +1,6 @@
 // `contactlab dem variants` and `dem profile`: the force variants' speed against error, and
 // the report's profile (phase split, serial fraction, Amdahl bound against the measured
-// speed-up); `tune --dem`: the fastest force variant by timing every one. All on a config's
-// scene or a checkpoint of it.
+// speed-up), on a config's scene or a checkpoint of it.
 #include <fmt/core.h>
 #include <omp.h>
 
@@ -18,45 +17,12 @@
 #include "contactlab/dem/variant_study.hpp"
 #include "contactlab/kernels/atomic_file.hpp"
 #include "contactlab/kernels/error.hpp"
+#include "dem_start.hpp"
 
 namespace contactlab::cli {
 namespace {
 
 namespace dem = contactlab::dem;
-
-// Where both start: a config's scene, optionally restored from a checkpoint; the thread counts
-// and the timed steps.
-struct DemStart {
-  std::string config;
-  std::string restart;
-  std::vector<int> threads{1, 2};
-  std::uint64_t steps = 200;
-
-  void add_options(CLI::App* app, const char* threads_help, const char* steps_help) {
-    app->add_option("config", config, "DEM config")->required();
-    app->add_option("--restart", restart, "start from this checkpoint of the config");
-    app->add_option("--threads", threads, threads_help)->delimiter(',');
-    app->add_option("--steps", steps, steps_help);
-  }
-  dem::DemConfig checked_config() const {
-    if (steps == 0) throw InputError("--steps must be >= 1");
-    if (threads.empty()) throw InputError("--threads: give at least one thread count");
-    for (const int t : threads) {
-      if (t < 1) throw InputError("--threads: every thread count must be >= 1");
-    }
-    return dem::read_dem_config(config);
-  }
-  std::unique_ptr<dem::Engine> engine(const dem::DemConfig& scene, const dem::Particles& particles,
-                                      const dem::ForceVariant& variant, int thread_count) const {
-    dem::EngineSettings settings = scene.settings;
-    settings.threads = thread_count;
-    settings.force_variant = variant;
-    settings.warn_large_overlaps = false;
-    auto started = std::make_unique<dem::Engine>(settings, particles);
-    if (!restart.empty()) dem::read_checkpoint(*started, restart);
-    return started;
-  }
-};
 
 // Every force variant (or the listed ones) against the deterministic default on a config's
 // scene: speed, speed-up and the largest position difference after the same steps.
@@ -175,63 +141,6 @@ struct DemProfileCommand {
 };
 
 }  // namespace
-
-int tune_dem(const DemTuneRequest& request) {
-  if (request.steps == 0) throw InputError("--dem-steps must be >= 1");
-  if (!request.json_out.empty()) check_writable(request.json_out);
-  DemStart start;
-  start.config = request.config;
-  start.restart = request.restart;
-  start.threads = {request.threads};
-  start.steps = request.steps;
-  const dem::DemConfig config = start.checked_config();
-  const dem::Particles particles = dem::make_particles(config);
-  const std::vector<dem::ForceVariant> variants = dem::force_variants({1, 4, 16});
-  auto make_engine = [&](const dem::ForceVariant& variant, int threads) {
-    return start.engine(config, particles, variant, threads);
-  };
-  const std::vector<dem::VariantStudyRow> rows =
-      dem::variant_study(make_engine, variants, start.threads, start.steps);
-  const auto best = std::min_element(
-      rows.begin(), rows.end(), [](const auto& a, const auto& b) { return a.seconds < b.seconds; });
-  auto regret = [&](const dem::ForceVariant& v) {
-    for (const dem::VariantStudyRow& r : rows) {
-      if (r.variant == v) return r.seconds / best->seconds - 1.0;
-    }
-    return 0.0;
-  };
-  const dem::ForceVariant report_choice =
-      dem::parse_force_variant("per-thread/dynamic,1/walls=serial");
-  fmt::print(
-      "tune --dem '{}': {} particles, {} threads, {} force variants timed for {} steps each "
-      "(exhaustive; one run each)\n",
-      config.name, particles.size(), request.threads, rows.size(), request.steps);
-  fmt::print("chosen      {:<48} {:.4g} particle-steps/s, max |dx| / d {:.3g} from the default\n",
-             dem::to_string(best->variant), best->particle_steps_per_s, best->max_deviation);
-  fmt::print("default     {:<48} regret {:+.1f}%\n", dem::to_string(dem::ForceVariant{}),
-             100.0 * regret(dem::ForceVariant{}));
-  fmt::print("report's    {:<48} regret {:+.1f}%\n", dem::to_string(report_choice),
-             100.0 * regret(report_choice));
-  if (!request.json_out.empty()) {
-    nlohmann::json doc;
-    doc["kind"] = "dem_force_variant_tuning";
-    doc["config"] = request.config;
-    doc["threads"] = request.threads;
-    doc["steps"] = request.steps;
-    doc["chosen"] = dem::to_string(best->variant);
-    doc["variants"] = nlohmann::json::array();
-    for (const dem::VariantStudyRow& r : rows) {
-      doc["variants"].push_back({{"variant", dem::to_string(r.variant)},
-                                 {"seconds", r.seconds},
-                                 {"particle_steps_per_s", r.particle_steps_per_s},
-                                 {"regret", r.seconds / best->seconds - 1.0},
-                                 {"max_deviation_diameters", r.max_deviation},
-                                 {"bit_identical_to_default", r.bit_identical}});
-    }
-    write_file_atomically(request.json_out, [&](std::ostream& out) { out << doc.dump(2) << '\n'; });
-  }
-  return 0;
-}
 
 std::vector<Subcommand> add_dem_study_commands(CLI::App& dem_app) {
   auto variants = std::make_shared<DemVariantsCommand>();

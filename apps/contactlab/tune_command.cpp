@@ -31,6 +31,7 @@ struct TuneCommand {
   int search_samples_ = tn::TuneOptions{}.search_samples;
   int exhaustive_rounds_ = tn::TuneOptions{}.exhaustive_rounds;
   int verify_rounds_ = tn::TuneOptions{}.verify_rounds;
+  CLI::Option* verify_rounds_option_ = nullptr;
   std::string command_line_;
   MpiCliOptions mpi_;
   DemTuneRequest dem_;  // --dem: tune the DEM force pass instead of detection
@@ -57,15 +58,19 @@ void TuneCommand::add_to(CLI::App& sub) {
   sub.add_option("--exhaustive-rounds", exhaustive_rounds_,
                  "rounds over the chunk grid in the exhaustive sweep (one run per chunk each)")
       ->check(CLI::PositiveNumber);
-  sub.add_option("--verify-rounds", verify_rounds_,
-                 "rounds of the final verification (every choice timed once per round)")
-      ->check(CLI::PositiveNumber);
+  verify_rounds_option_ =
+      sub.add_option("--verify-rounds", verify_rounds_,
+                     "rounds of the final verification (every choice timed once per round; "
+                     "--dem: 3 unless given)")
+          ->check(CLI::PositiveNumber);
   mpi_.add_to(sub,
               "tune each MPI rank's part (under mpirun): replicated (the paper) or decomposed");
   sub.add_option("--dem", dem_.config,
-                 "tune the DEM force pass of this config (exhaustive over the force variants)");
+                 "tune the DEM force pass of this config (model, search; --exhaustive, "
+                 "--predict-only, --verify-rounds apply)");
   sub.add_option("--restart", dem_.restart, "--dem: start from this checkpoint of the config");
-  sub.add_option("--dem-steps", dem_.steps, "--dem: timed steps per variant (200)");
+  sub.add_option("--dem-steps", dem_.steps,
+                 "--dem: timed steps per run (calibration, search, exhaustive, verification; 200)");
 }
 
 void TuneCommand::check() const {
@@ -118,6 +123,9 @@ int TuneCommand::run() const {
     DemTuneRequest request = dem_;
     request.threads = resolve_threads(threads_);
     request.json_out = json_out_;
+    request.predict_only = predict_only_;
+    request.exhaustive = exhaustive_;
+    if (verify_rounds_option_->count() > 0) request.verify_rounds = verify_rounds_;
     return tune_dem(request);
   }
   if (!mpi_.mode.empty()) {

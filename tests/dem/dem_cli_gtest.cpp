@@ -219,19 +219,51 @@ TEST(DemCli, ProfilePrintsPhasesSerialFractionAndAmdahl) {
   EXPECT_NE(bad.output.find("must start with 1"), std::string::npos) << bad.output;
 }
 
-// tune --dem times every force variant and names the fastest; the report lists them all.
-TEST(DemCli, TuneDemChoosesTheFastestForceVariant) {
+// tune --dem: the model (calibrated, then every candidate priced), the search over its best
+// and the exhaustive sweep, each choice verified beside the default and the report's.
+TEST(DemCli, TuneDemRunsModelSearchAndExhaustive) {
   TempDir dir;
   const std::string report = dir.file("tune-dem.json");
-  const auto r = run_command(contactlab_exe() + " tune --dem " + config_path() +
-                             " --threads 2 --dem-steps 5 --json " + report);
+  const auto r =
+      run_command(contactlab_exe() + " tune --dem " + config_path() +
+                  " --threads 2 --dem-steps 5 --exhaustive --verify-rounds 2 --json " + report);
   EXPECT_EQ(r.exit_code, 0) << r.output;
-  for (const char* line : {"chosen", "default     ordered/static", "report's"}) {
+  for (const char* line : {"calibrated by 10 runs", "model ", "search ", "exhaustive ", "default ",
+                           "report's ", "chosen", "model err"}) {
     EXPECT_NE(r.output.find(line), std::string::npos) << line << "\n" << r.output;
   }
   const std::string json = slurp(report);
-  EXPECT_NE(json.find("\"kind\": \"dem_force_variant_tuning\""), std::string::npos) << json;
-  EXPECT_NE(json.find("per-thread/dynamic,16"), std::string::npos) << json;
+  for (const char* key : {"\"kind\": \"dem_force_variant_tuning\"", "\"calibration\"",
+                          "\"seconds_per_foreign_j_side\"", "\"predictions\"", "\"model_error\"",
+                          "full-list/dynamic,16", "per-thread/dynamic,16"}) {
+    EXPECT_NE(json.find(key), std::string::npos) << key << "\n" << json;
+  }
+  // --predict-only: the model alone, nothing timed but its calibration.
+  const auto model = run_command(contactlab_exe() + " tune --dem " + config_path() +
+                                 " --threads 1 --dem-steps 5 --predict-only");
+  EXPECT_EQ(model.exit_code, 0) << model.output;
+  EXPECT_NE(model.output.find("predicted only"), std::string::npos) << model.output;
+  EXPECT_EQ(model.output.find("search "), std::string::npos) << model.output;
+}
+
+// dem run --variant auto --retune: the model's choice at the start and at every rebuild, the
+// log of which variant ran when; --retune alone is refused.
+TEST(DemCli, RunRetunesAtRebuildsAndLogsTheVariants) {
+  TempDir dir;
+  const std::string log = dir.file("variants.csv");
+  const auto r = run_command(contactlab_exe() + " dem run " + config_path() +
+                             " --threads 2 --steps 300 --variant auto --retune "
+                             "--calibration-steps 5 --variant-log " +
+                             log);
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("variant auto: force model calibrated by 10 runs"), std::string::npos)
+      << r.output;
+  EXPECT_NE(r.output.find("variants ran"), std::string::npos) << r.output;
+  const std::string csv = slurp(log);
+  EXPECT_EQ(csv.rfind("begin_step,end_step,time_s,variant,predicted_gain\n0,", 0), 0u) << csv;
+  const auto bad = run_command(contactlab_exe() + " dem run " + config_path() + " --retune");
+  EXPECT_EQ(bad.exit_code, 2) << bad.output;
+  EXPECT_NE(bad.output.find("--retune needs --variant auto"), std::string::npos) << bad.output;
 }
 
 }  // namespace

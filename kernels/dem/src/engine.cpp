@@ -198,6 +198,13 @@ void Engine::check_pair_overlap(std::size_t k) const {
        i);
 }
 
+void Engine::set_force_variant(const ForceVariant& variant) {
+  if (const auto rule = broken_rule(variant)) {
+    throw InputError("force variant '" + to_string(variant) + "': " + std::string(*rule));
+  }
+  settings_.force_variant = variant;
+}
+
 void Engine::compute_forces(bool final_kick) {
   Particles& p = particles_;
   PairList& q = pairs_;

@@ -10,6 +10,7 @@ namespace {
 
 struct Run {
   double seconds = 0.0;
+  double force_seconds = 0.0;
   std::size_t particles = 0;
   std::vector<double> position;  // x, y, z by stable id
   std::vector<double> diameter;  // by stable id
@@ -19,10 +20,15 @@ Run run(const std::function<std::unique_ptr<Engine>(const ForceVariant&, int)>& 
         const ForceVariant& variant, int threads, std::uint64_t steps) {
   std::unique_ptr<Engine> engine = make_engine(variant, threads);
   engine->step();  // untimed: first touches of the variant's buffers
+  const PhaseTimes before = engine->phase_times();
   const double t0 = omp_get_wtime();
   engine->run_steps(steps);
   Run r;
   r.seconds = omp_get_wtime() - t0;
+  const PhaseTimes& after = engine->phase_times();
+  r.force_seconds = (after.pair_forces_s - before.pair_forces_s) +
+                    (after.reduction_s - before.reduction_s) + (after.walls_s - before.walls_s) +
+                    (after.update_s - before.update_s);
   const Particles& p = engine->particles();
   r.particles = p.size();
   std::uint32_t max_id = 0;
@@ -55,6 +61,7 @@ std::vector<VariantStudyRow> variant_study(
       row.variant = variant;
       row.threads = threads;
       row.seconds = r.seconds;
+      row.force_seconds_per_step = r.force_seconds / static_cast<double>(steps);
       row.particle_steps_per_s =
           static_cast<double>(r.particles) * static_cast<double>(steps) / r.seconds;
       row.speedup = reference.seconds / r.seconds;

@@ -125,6 +125,9 @@ class Engine {
   void restore(const State& state, Particles particles, PairList pairs);
 
   void set_threads(int threads) { settings_.threads = threads; }
+  // From the next step on (e.g. re-tuned at a rebuild); throws InputError for a variant that
+  // breaks a rule (force_variant.hpp).
+  void set_force_variant(const ForceVariant& variant);
 
  private:
   void rebuild();

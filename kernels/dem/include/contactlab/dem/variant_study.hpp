@@ -16,6 +16,9 @@ struct VariantStudyRow {
   ForceVariant variant;
   int threads = 1;
   double seconds = 0.0;  // wall time of the steps
+  // Of it, the force pass (pairs, reduction, walls, update: what the force model predicts),
+  // per step.
+  double force_seconds_per_step = 0.0;
   double particle_steps_per_s = 0.0;
   double speedup = 0.0;        // over the ordered default at the same thread count
   double max_deviation = 0.0;  // max |x - x_ordered| over particles, in diameters
