@@ -116,6 +116,7 @@ struct DemRunCommand {
   std::string restart_;
   std::string checkpoint_;
   std::uint64_t steps_ = 0;
+  double until_discharged_ = 0.0;
   bool retune_ = false;
   double retune_margin_ = 0.05;
   std::uint64_t calibration_steps_ = 50;
@@ -142,6 +143,12 @@ struct DemRunCommand {
     }
     if (!variant_log_.empty()) check_writable(variant_log_);
     const bool has_sink = settings.sink_below_z > -std::numeric_limits<double>::infinity();
+    if (until_discharged_ < 0 || until_discharged_ > 1) {
+      throw InputError("--until-discharged must be a fraction in (0, 1]");
+    }
+    if (until_discharged_ > 0 && !has_sink) {
+      throw InputError("--until-discharged needs a config with a sink");
+    }
     // Output paths are checked before any work.
     std::unique_ptr<dem::FrameWriter> writer;
     if (!vtk_dir_.empty()) writer = std::make_unique<dem::FrameWriter>(vtk_dir_, config.name);
@@ -218,6 +225,10 @@ struct DemRunCommand {
     };
     if (engine.step_count() == 0) output();
     if (tuning) tuning->start(engine);
+    // --until-discharged F: the mass the sink must have taken (of all the run started with).
+    double start_mass = engine.removed_mass();
+    for (const double m : engine.particles().mass) start_mass += m;
+    const double stop_mass = until_discharged_ * start_mass;
     const double t0 = omp_get_wtime();
     const std::uint64_t first_step = engine.step_count();
     std::uint64_t particle_steps = 0;
@@ -235,6 +246,15 @@ struct DemRunCommand {
         if (empty) {
           fmt::print("every particle has left through the sink by t = {:.6g} s: stopping\n",
                      engine.time_s());
+          break;
+        }
+        if (stop_mass > 0 && engine.removed_mass() >= stop_mass) {
+          output();
+          if (!checkpoint.empty()) dem::write_checkpoint(engine, frame, checkpoint);
+          fmt::print(
+              "the sink has taken {:.6g} kg of {:.6g} kg (--until-discharged {:g}) by t = "
+              "{:.6g} s: stopping\n",
+              engine.removed_mass(), start_mass, until_discharged_, engine.time_s());
           break;
         }
       }
@@ -373,6 +393,8 @@ Subcommand add_dem_command(CLI::App& app) {
   run_app->add_option("--steps", run->steps_,
                       "run N steps from where the run stands (default 0: to the config's end)");
   run_app->add_option("--restart", run->restart_, "continue from a checkpoint of this config");
+  run_app->add_option("--until-discharged", run->until_discharged_,
+                      "stop once the sink has taken this fraction of the mass (e.g. 0.5)");
   run_app->add_option("--checkpoint", run->checkpoint_,
                       "checkpoint file written at every output (default: DIR/last.chk with --vtk)");
   auto validate = std::make_shared<DemValidateCommand>();
