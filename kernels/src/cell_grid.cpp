@@ -1,5 +1,7 @@
 #include "contactlab/kernels/cell_grid.hpp"
 
+#include <omp.h>
+
 #include <algorithm>
 #include <string>
 #include <utility>
@@ -53,54 +55,81 @@ CellGrid::CellGrid(const Box& box, double min_width, CellNumbering numbering)
   }
 }
 
-void CellRegistry::assign(const CellGrid& grid, const Scene& scene, Scene* sorted) {
+void CellRegistry::assign(const CellGrid& grid, const Scene& scene, Scene* sorted, int threads) {
   const std::size_t n = scene.size();
   const std::uint64_t keys = grid.key_count();
   // Sort (key, input index) pairs by key with a stable LSD radix sort. A counting sort over
   // the cell table would touch the (up to 2^28-entry) table at random once per particle; the
   // radix passes keep their 2^kDigitBits counters in L1 and write in sequential streams.
+  // In parallel: each thread counts its contiguous range of the input, the ranges' offsets
+  // are laid out bucket by bucket in thread order (so the sort stays stable and the result is
+  // the same for any thread count), and each thread scatters its range.
   constexpr int kDigitBits = 12;
-  constexpr std::uint64_t kBuckets = std::uint64_t{1} << kDigitBits;
+  constexpr std::size_t kBuckets = std::size_t{1} << kDigitBits;
   int key_bits = 1;
   while ((std::uint64_t{1} << key_bits) < keys) ++key_bits;
   const int passes = (key_bits + kDigitBits - 1) / kDigitBits;
+  const auto team = static_cast<std::size_t>(std::max(1, threads));
 
   sort_buffer_.resize(n);
   sort_scratch_.resize(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    const auto c = grid.coords_of(scene.x[i], scene.y[i], scene.z[i]);
-    sort_buffer_[i] = (std::uint64_t{grid.key(c[0], c[1], c[2])} << 32) | i;
-  }
-  std::vector<std::uint64_t> histogram(kBuckets);
-  for (int pass = 0; pass < passes; ++pass) {
-    const int shift = 32 + pass * kDigitBits;
-    std::fill(histogram.begin(), histogram.end(), 0);
-    for (const std::uint64_t entry : sort_buffer_) ++histogram[(entry >> shift) & (kBuckets - 1)];
-    std::uint64_t running = 0;
-    for (auto& h : histogram) running += std::exchange(h, running);
-    for (const std::uint64_t entry : sort_buffer_) {
-      sort_scratch_[histogram[(entry >> shift) & (kBuckets - 1)]++] = entry;
-    }
-    sort_buffer_.swap(sort_scratch_);
-  }
-
-  // Slots in key order; cell_begin[k] = first slot whose key is >= k.
   slot_particle.resize(n);
   cell_begin.resize(keys + 1);
-  std::uint64_t next_key = 0;  // cell_begin is filled for every key below next_key
-  std::uint32_t largest = 0, run_start = 0;
-  for (std::uint32_t s = 0; s < n; ++s) {
-    const std::uint64_t entry = sort_buffer_[s];
-    const std::uint64_t slot_key = entry >> 32;
-    slot_particle[s] = static_cast<std::uint32_t>(entry);
-    if (slot_key >= next_key) {  // the first slot of a new cell
-      largest = std::max(largest, s - run_start);
-      run_start = s;
-      while (next_key <= slot_key) cell_begin[next_key++] = s;
+  histograms_.assign(team * kBuckets, 0);
+  std::uint32_t largest = 0;
+  std::uint64_t* from = sort_buffer_.data();
+  std::uint64_t* to = sort_scratch_.data();
+#pragma omp parallel num_threads(static_cast <int>(team)) reduction(max : largest)
+  {
+    const auto t = static_cast<std::size_t>(omp_get_thread_num());
+    const std::size_t size = static_cast<std::size_t>(omp_get_num_threads());
+    const std::size_t b = n * t / size, e = n * (t + 1) / size;
+    for (std::size_t i = b; i < e; ++i) {
+      const auto c = grid.coords_of(scene.x[i], scene.y[i], scene.z[i]);
+      from[i] = (std::uint64_t{grid.key(c[0], c[1], c[2])} << 32) | i;
+    }
+    std::uint64_t* mine = histograms_.data() + t * kBuckets;
+    std::uint64_t* in = from;
+    std::uint64_t* out = to;
+    for (int pass = 0; pass < passes; ++pass) {
+      const int shift = 32 + pass * kDigitBits;
+      std::fill(mine, mine + kBuckets, 0);
+      for (std::size_t i = b; i < e; ++i) ++mine[(in[i] >> shift) & (kBuckets - 1)];
+#pragma omp barrier
+#pragma omp single
+      {  // offsets: bucket by bucket, within a bucket thread by thread
+        std::uint64_t running = 0;
+        for (std::size_t bucket = 0; bucket < kBuckets; ++bucket) {
+          for (std::size_t u = 0; u < size; ++u) {
+            running += std::exchange(histograms_[u * kBuckets + bucket], running);
+          }
+        }
+      }  // implicit barrier
+      for (std::size_t i = b; i < e; ++i) out[mine[(in[i] >> shift) & (kBuckets - 1)]++] = in[i];
+      std::swap(in, out);
+#pragma omp barrier
+    }
+    // Slots in key order; cell_begin[k] = first slot whose key is >= k. Each thread fills the
+    // keys from the one before its range's first new cell up to its last: disjoint ranges.
+    for (std::size_t s = b; s < e; ++s) {
+      const std::uint64_t entry = in[s];
+      const std::uint64_t slot_key = entry >> 32;
+      slot_particle[s] = static_cast<std::uint32_t>(entry);
+      const std::uint64_t previous = s == 0 ? 0 : (in[s - 1] >> 32) + 1;
+      if (s > 0 && slot_key + 1 == previous) continue;  // same cell as the slot before
+      for (std::uint64_t k = previous; k <= slot_key; ++k) {
+        cell_begin[k] = static_cast<std::uint32_t>(s);
+      }
+      std::size_t end = s + 1;  // the cell's run, possibly into the next thread's range
+      while (end < n && (in[end] >> 32) == slot_key) ++end;
+      largest = std::max(largest, static_cast<std::uint32_t>(end - s));
+    }
+    if (t + 1 == size) {  // the keys past the last particle's (all of them when there is none)
+      const std::uint64_t after = n == 0 ? 0 : (in[n - 1] >> 32) + 1;
+      for (std::uint64_t k = after; k <= keys; ++k) cell_begin[k] = static_cast<std::uint32_t>(n);
     }
   }
-  largest = std::max(largest, static_cast<std::uint32_t>(n) - run_start);
-  while (next_key <= keys) cell_begin[next_key++] = static_cast<std::uint32_t>(n);
+  if (passes % 2 == 1) sort_buffer_.swap(sort_scratch_);  // the sorted entries' vector first
   max_occupancy = largest;
 
   if (sorted) {
@@ -111,6 +140,7 @@ void CellRegistry::assign(const CellGrid& grid, const Scene& scene, Scene* sorte
     sorted->z.resize(n);
     sorted->diameter.resize(scene.diameter.size());
     const bool diameters = scene.has_diameters();
+#pragma omp parallel for schedule(static) num_threads(static_cast <int>(team))
     for (std::size_t s = 0; s < n; ++s) {
       const std::uint32_t i = slot_particle[s];
       sorted->x[s] = scene.x[i];
@@ -121,7 +151,9 @@ void CellRegistry::assign(const CellGrid& grid, const Scene& scene, Scene* sorte
     particle_slot.clear();
   } else {
     particle_slot.resize(n);
-    for (std::uint32_t s = 0; s < n; ++s) particle_slot[slot_particle[s]] = s;
+#pragma omp parallel for schedule(static) num_threads(static_cast <int>(team))
+    for (std::size_t s = 0; s < n; ++s)
+      particle_slot[slot_particle[s]] = static_cast<std::uint32_t>(s);
   }
 }
 

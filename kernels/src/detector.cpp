@@ -279,7 +279,7 @@ CellGrid ContactDetector::prepare(const Scene& scene, const DetectOptions& optio
 
   const double setup_start = omp_get_wtime();
   working_is_sorted_ = order != Order::kUnsorted;
-  registry_.assign(grid, scene, working_is_sorted_ ? &sorted_ : nullptr);
+  registry_.assign(grid, scene, working_is_sorted_ ? &sorted_ : nullptr, run.threads);
   run.setup_s = omp_get_wtime() - setup_start;
   run.max_cell_occupancy = registry_.max_occupancy;
   return grid;

@@ -164,10 +164,11 @@ TEST(CellGrid, MortonKeysAreDistinctAndInterleaved) {
   EXPECT_EQ(CellGrid(Box{}, 0.3, CellNumbering::kMorton).key(2, 0, 0), 8u);
 }
 
-// The counting sort: every particle in exactly one slot, in the range of its own cell.
-void check_registry(const CellGrid& grid, const Scene& scene) {
+// The radix sort: every particle in exactly one slot, in the range of its own cell, the same
+// for any thread count.
+void check_registry(const CellGrid& grid, const Scene& scene, int threads) {
   CellRegistry registry;
-  registry.assign(grid, scene);
+  registry.assign(grid, scene, nullptr, threads);
   const std::size_t n = scene.size();
   ASSERT_EQ(registry.cell_begin.size(), grid.key_count() + 1);
   ASSERT_EQ(registry.cell_begin.front(), 0u);
@@ -205,7 +206,7 @@ void check_registry(const CellGrid& grid, const Scene& scene) {
   // With a `sorted` output: the same registration, and the particles copied in slot order.
   CellRegistry with_copy;
   Scene sorted;
-  with_copy.assign(grid, scene, &sorted);
+  with_copy.assign(grid, scene, &sorted, threads);
   EXPECT_TRUE(std::equal(with_copy.cell_begin.begin(), with_copy.cell_begin.end(),
                          registry.cell_begin.begin(), registry.cell_begin.end()));
   EXPECT_TRUE(std::equal(with_copy.slot_particle.begin(), with_copy.slot_particle.end(),
@@ -236,7 +237,9 @@ TEST(CellRegistry, CountingSortInvariants) {
     for (const double d : {0.02, 0.1, 0.6}) {
       for (const auto numbering : {CellNumbering::kLinear, CellNumbering::kMorton}) {
         SCOPED_TRACE(std::string(to_string(kind)) + " D = " + std::to_string(d));
-        check_registry(CellGrid(scene.box, d, numbering), scene);
+        for (const int threads : {1, 2, 3}) {
+          check_registry(CellGrid(scene.box, d, numbering), scene, threads);
+        }
       }
     }
   }
@@ -244,9 +247,12 @@ TEST(CellRegistry, CountingSortInvariants) {
 
 TEST(CellRegistry, EdgeCases) {
   const CellGrid grid(Box{}, 0.1, CellNumbering::kLinear);
-  check_registry(grid, Scene{});
-  check_registry(grid, make_scene({{1, 1, 1}}));
-  check_registry(grid, make_scene({{0.5, 0.5, 0.5}, {0.5, 0.5, 0.5}, {0.5, 0.5, 0.5}, {1, 1, 1}}));
+  for (const int threads : {1, 2, 5}) {  // also more threads than particles
+    check_registry(grid, Scene{}, threads);
+    check_registry(grid, make_scene({{1, 1, 1}}), threads);
+    check_registry(grid, make_scene({{0.5, 0.5, 0.5}, {0.5, 0.5, 0.5}, {0.5, 0.5, 0.5}, {1, 1, 1}}),
+                   threads);
+  }
   CellRegistry registry;
   registry.assign(grid, make_scene({{0.5, 0.5, 0.5}, {0.5, 0.5, 0.5}, {0.5, 0.5, 0.5}, {1, 1, 1}}));
   EXPECT_EQ(registry.max_occupancy, 3u);

@@ -85,12 +85,15 @@ struct CellRegistry {
   std::uint32_t max_occupancy = 0;
 
   // Registers the particles. With `sorted`, also copies the coordinates (and diameters) into
-  // slot order within the same pass: the paper's reordering. particle_slot is filled only
-  // without it (the unsorted layout needs it; sorted ones use slots as ids).
-  void assign(const CellGrid& grid, const Scene& scene, Scene* sorted = nullptr);
+  // slot order: the paper's reordering. particle_slot is filled only without it (the
+  // unsorted layout needs it; sorted ones use slots as ids). Runs on `threads` threads (keys,
+  // the radix sort's passes, the cell table, the reordering); the result is the same for any
+  // thread count.
+  void assign(const CellGrid& grid, const Scene& scene, Scene* sorted = nullptr, int threads = 1);
 
  private:
   LargeVector<std::uint64_t> sort_buffer_, sort_scratch_;  // (key << 32 | index) pairs
+  std::vector<std::uint64_t> histograms_;                  // per thread, the radix digit counts
 };
 
 }  // namespace contactlab
