@@ -171,6 +171,7 @@ void ContactDetector::detect(const CellGrid& grid, const Layout& layout, const P
   // start of thread t's share of row j's reverse entries. Per-thread counts avoid atomics.
   if (half) reverse_count_.resize(std::size_t{n} * threads);
   contacts_.offsets.resize(std::size_t{n} + 1);
+  range_sums_.assign(threads, 0);
   run.thread_busy_s.assign(threads, 0.0);
   std::vector<std::uint64_t> thread_tests(threads, 0);
 
@@ -210,26 +211,40 @@ void ContactDetector::assemble_rows(int tid, int threads, bool half) {
     std::fill(reverse, reverse + n, 0u);
     for (const std::uint32_t j : std::span(out.data(), out.size())) ++reverse[j];
   }
+  // The row offsets by a parallel prefix sum: each thread sums the rows of its range of
+  // particles (turning the per-thread reverse counts of each row into where each thread's share
+  // starts), the ranges' sums are scanned, and each thread shifts its offsets.
+#pragma omp barrier
+  const std::uint32_t first = static_cast<std::uint32_t>(std::uint64_t{n} * tid / threads);
+  const std::uint32_t last = static_cast<std::uint32_t>(std::uint64_t{n} * (tid + 1) / threads);
+  std::uint64_t* const offsets = contacts_.offsets.data();
+  std::uint64_t running = 0;
+  for (std::uint32_t i = first; i < last; ++i) {
+    std::uint32_t row = found_count_[i];
+    if (half) {
+      // Exclusive prefix over threads: where each thread's reverse entries of row i start.
+      for (int t = 0; t < threads; ++t) {
+        std::uint32_t& count = reverse_count_[std::size_t{n} * t + i];
+        const std::uint32_t share = count;
+        count = row;
+        row += share;
+      }
+    }
+    running += row;
+    offsets[i + 1] = running;
+  }
+  range_sums_[tid] = running;
+#pragma omp barrier
+  std::uint64_t base = 0;
+  for (int t = 0; t < tid; ++t) base += range_sums_[t];
+  if (base > 0) {
+    for (std::uint32_t i = first; i < last; ++i) offsets[i + 1] += base;
+  }
 #pragma omp barrier
 #pragma omp single
   {
-    std::uint64_t total = 0;
-    contacts_.offsets[0] = 0;
-    for (std::uint32_t i = 0; i < n; ++i) {
-      std::uint32_t row = found_count_[i];
-      if (half) {
-        // Exclusive prefix over threads: where each thread's reverse entries of row i start.
-        for (int t = 0; t < threads; ++t) {
-          std::uint32_t& count = reverse_count_[std::size_t{n} * t + i];
-          const std::uint32_t share = count;
-          count = row;
-          row += share;
-        }
-      }
-      total += row;
-      contacts_.offsets[i + 1] = total;
-    }
-    contacts_.partners.resize(total);
+    offsets[0] = 0;
+    contacts_.partners.resize(offsets[n]);
   }
   std::uint32_t* const partners = contacts_.partners.data();
   const std::uint32_t* found = out.data();

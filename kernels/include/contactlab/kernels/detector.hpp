@@ -183,6 +183,7 @@ class ContactDetector {
               const DetectOptions& options, DetectRun& run);
   void assemble_rows(int thread, int threads, bool half);
 
+  std::vector<std::uint64_t> range_sums_;  // assemble_rows: each thread's rows, summed
   CellRegistry registry_;
   Scene sorted_;  // coordinates in slot order, for the sorted orders
   LargeVector<float> narrow_x_, narrow_y_, narrow_z_, narrow_d_;  // single-precision copies
