@@ -100,6 +100,26 @@ TEST(DemWalls, OrificeRimHoldsASphereUntilThePlateIsRemoved) {
   EXPECT_LT(engine.particles().vz[0], -0.05);
 }
 
+// A wall out of a particle's reach at a rebuild is not evaluated until the next one (the
+// engine's wall reach): a sphere flying at a cylinder from its axis, many rebuilds away, still
+// meets it and bounces back without a deep overlap (which would stop the run).
+TEST(DemWalls, FarWallIsMetAfterManyRebuilds) {
+  EngineSettings s = falling_settings();
+  s.gravity = {0, 0, 0};
+  Wall silo = make(WallKind::kCylinder);
+  silo.radius = 10e-3;
+  validate_wall(silo, "silo");
+  s.walls.push_back(silo);
+  Particles p;
+  p.add(0, 0, 0, 0, 0, 1e-3, 2500);
+  p.vx[0] = 3.0;  // 6 um a step: a rebuild every 17 steps (skin 0.2 mm)
+  Engine engine(s, p);
+  engine.run_steps(3000);  // the wall at 9 mm from the axis is met after 1500 steps
+  EXPECT_GT(engine.rebuilds(), 50u);
+  EXPECT_LT(engine.particles().vx[0], -0.5);  // bounced (e = 0.3)
+  EXPECT_LT(engine.particles().x[0], 9e-3);
+}
+
 // A plane moving up at 0.1 m/s from t = 0.005 s to 0.015 s lifts a sphere resting on it (it
 // bounces on the wall's sudden start); when the wall stops the sphere flies on and lands on it.
 TEST(DemWalls, MovingWallCarriesASphere) {

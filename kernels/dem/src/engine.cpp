@@ -93,6 +93,35 @@ void Engine::refresh_kinematics() {
                           p.pvz[k], p.mass[k], p.pwx[k], p.pwy[k],    p.pwz[k]};
     std::copy(v, v + 11, kin);
   }
+  index_wall_reach();
+}
+
+void Engine::index_wall_reach() {
+  // Until the next rebuild no particle moves more than skin/2 (the rebuild criterion), so a
+  // particle farther than r + skin from a still wall's surface cannot touch it, and its spring
+  // with it is zero (it was zeroed when their contact ended). Moving walls, walls past the
+  // 32 bits and points with no closest surface point (outside a cylinder's axial extent) are
+  // always checked.
+  const Particles& p = particles_;
+  const std::size_t n = p.size();
+  wall_reach_.assign(n, 0);
+  for (std::size_t w = 0; w < settings_.walls.size() && w < 32; ++w) {
+    const Wall& wall = settings_.walls[w];
+    if (!wall.active(time_s_)) continue;
+    const bool moving = wall.velocity != Vec3{0, 0, 0} && time_s_ < wall.move_until_s;
+    const std::uint32_t bit = std::uint32_t{1} << w;
+#pragma omp parallel for schedule(static) num_threads(settings_.threads)
+    for (std::size_t k = 0; k < n; ++k) {
+      Vec3 q;
+      const double reach = p.radius[k] + settings_.skin;
+      if (moving || !closest_point(wall, time_s_, {p.x[k], p.y[k], p.z[k]}, q) ||
+          (p.x[k] - q[0]) * (p.x[k] - q[0]) + (p.y[k] - q[1]) * (p.y[k] - q[1]) +
+                  (p.z[k] - q[2]) * (p.z[k] - q[2]) <
+              reach * reach) {
+        wall_reach_[k] |= bit;
+      }
+    }
+  }
 }
 
 void Engine::rebuild() {
@@ -243,7 +272,9 @@ void Engine::compute_forces(bool final_kick) {
     const double xa = ka[0], ya = ka[1], za = ka[2], r = ka[3], mass = ka[7];
     const double pvxa = ka[4], pvya = ka[5], pvza = ka[6], pwxa = ka[8], pwya = ka[9],
                  pwza = ka[10];
+    const std::uint32_t reach = wall_reach_[a];
     for (std::size_t w = 0; w < wall_count; ++w) {
+      if (w < 32 && ((reach >> w) & 1u) == 0) continue;  // out of reach (its spring is zero)
       double* hx = &p.wall_spring[3 * w][a];
       double* hy = &p.wall_spring[3 * w + 1][a];
       double* hz = &p.wall_spring[3 * w + 2][a];

@@ -136,6 +136,7 @@ class Engine {
   void remove_sunk_particles();
   void index_ids();
   void refresh_kinematics();  // kin_ from the particle arrays (after a reorder or restore)
+  void index_wall_reach();    // wall_reach_ for the particles as they stand
   void compute_forces(bool final_kick);
   void check_pair_overlap(std::size_t k) const;
   [[noreturn]] void fail(const std::string& what, std::uint32_t index) const;
@@ -156,6 +157,8 @@ class Engine {
   std::uint64_t base_step_ = 0;
   PhaseTimes phases_;
   std::vector<double> kin_;  // what the pair loop reads per particle, side by side
+  // Per particle, bit w set when wall w may touch it before the next rebuild.
+  std::vector<std::uint32_t> wall_reach_;
   std::vector<double> acc_;  // per particle: the force pass's pair sums (detail::kAccStride)
   std::vector<std::vector<double>> block_scratch_;  // per thread: the force pass's pair block
   std::vector<std::vector<double>> thread_acc_;     // per thread: sums (per-thread accumulation)
