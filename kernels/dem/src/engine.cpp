@@ -128,7 +128,7 @@ void Engine::rebuild() {
   remove_sunk_particles();  // sink.cpp: removals happen at rebuilds only
   if (!particles_.id.empty()) {
     builder_.rebuild(particles_, pairs_, settings_.domain, settings_.skin,
-                     coefficients_.mu_roll > 0);
+                     coefficients_.mu_roll > 0, settings_.threads);
   }
   ++rebuilds_;
   index_ids();

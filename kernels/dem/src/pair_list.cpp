@@ -103,7 +103,7 @@ std::uint64_t pair_key(std::uint32_t a, std::uint32_t b) {
 }  // namespace
 
 RebuildStats NeighborBuilder::rebuild(Particles& p, PairList& pairs, const Domain& domain,
-                                      double skin, bool rolling) {
+                                      double skin, bool rolling, int threads) {
   const std::size_t n = p.size();
   RebuildStats stats;
   // 1. The touching pairs' springs, keyed by stable ids (oriented from the lower id).
@@ -196,9 +196,11 @@ RebuildStats NeighborBuilder::rebuild(Particles& p, PairList& pairs, const Domai
   }
   scene_.box = box;
 
-  // 3. Pairs within r_i + r_j + skin from the shared traversal (serial: a rebuild is rare and
-  //    its order must not depend on threads; rows come out canonical anyway).
-  DetectOptions options{parse_variant("particle/sorted/full/static"), 0.0, 1, nullptr};
+  // 3. Pairs within r_i + r_j + skin from the shared traversal, on the engine's threads: the
+  //    particle loop with the full stencil gives each particle's row from one thread in the
+  //    stencil's order, and the registration is the same for any thread count, so the list
+  //    (and the new order) does not depend on the threads.
+  DetectOptions options{parse_variant("particle/sorted/full/static"), 0.0, threads, nullptr};
   options.homes = HomeRange{0, static_cast<std::uint32_t>(n)};
   const ContactList list = detector_.neighbor_list(scene_, options, skin);
 

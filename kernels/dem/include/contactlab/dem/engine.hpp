@@ -47,8 +47,8 @@ struct EngineSettings {
   double sink_below_z = -std::numeric_limits<double>::infinity();
 };
 
-// Phase times of step() [s], summed since construction: the neighbour list (candidates; a
-// rebuild runs on one thread: its order must not depend on the thread count), the
+// Phase times of step() [s], summed since construction: the neighbour list (candidates, in
+// parallel; the carrying of springs and the reorder on one thread), the
 // pair forces, the reduction (the j sides other threads left, or the per-thread arrays' sum),
 // the walls when one thread does them (walls=serial), the update (walls when parallel,
 // gravity, kick), the integration (half kick, drift, checks). With the fused ordered pass

@@ -60,9 +60,10 @@ class NeighborBuilder {
  public:
   // Reorders `particles` by cell, rebuilds `pairs` for `skin` [m] and carries every non-zero
   // tangential spring (pair and wall) to the new list. Periodic positions are wrapped into
-  // the domain first. Throws InputError if a periodic length is under 3 pair reaches.
+  // the domain first. The candidate search runs on `threads` threads; the result is the same
+  // for any count. Throws InputError if a periodic length is under 3 pair reaches.
   RebuildStats rebuild(Particles& particles, PairList& pairs, const Domain& domain, double skin,
-                       bool rolling);
+                       bool rolling, int threads = 1);
 
  private:
   ContactDetector detector_;
