@@ -190,12 +190,13 @@ inline void add_to(double& sum, double value) {
   }
 }
 
-// The block's outputs added to `target` (a thread's own array, or with kAtomic the shared
-// one): i's row summed in registers, then added; each j side subtracted.
-template <bool kRolling, bool kAtomic>
-inline void accumulate_shared(const double* kin, const PairList& q, std::size_t first,
-                              std::size_t last, PairBlock& blk, double* target,
-                              std::uint64_t& large, std::uint32_t& bad) {
+// The rows [first, last) of a block: each row's outputs summed in pair order (i's force,
+// torque, touching contacts) and handed to store(i, sum), its overlaps counted, and each pair
+// handed to j_side(o, k, b) after its i side (o: the block's outputs, b: the pair's lane).
+template <bool kRolling, class JSide, class Store>
+inline void sum_rows(const PairList& q, std::size_t first, std::size_t last, PairBlock& blk,
+                     const double* kin, std::uint64_t& large, std::uint32_t& bad, JSide&& j_side,
+                     Store&& store) {
   const double* o[PairBlock::kOutputs];
   for (int f = 0; f < PairBlock::kOutputs; ++f) o[f] = blk.out(static_cast<PairBlock::Output>(f));
   const std::size_t k0 = q.rows[first];
@@ -206,27 +207,40 @@ inline void accumulate_shared(const double* kin, const PairList& q, std::size_t 
       const std::size_t b = k - k0;
       large += o[PairBlock::kLarge][b] != 0.0;
       if (o[PairBlock::kFailing][b] != 0.0) bad = std::min(bad, static_cast<std::uint32_t>(k));
-      const double roll[3] = {kRolling ? o[PairBlock::kRollX][b] : 0.0,
-                              kRolling ? o[PairBlock::kRollY][b] : 0.0,
-                              kRolling ? o[PairBlock::kRollZ][b] : 0.0};
       for (int d = 0; d < 3; ++d) {
         sum[d] += o[PairBlock::kFx + d][b];
         sum[3 + d] -= ri * o[PairBlock::kCx + d][b];
-        if constexpr (kRolling) sum[3 + d] += roll[d];
+        if constexpr (kRolling) sum[3 + d] += o[PairBlock::kRollX + d][b];
       }
       sum[6] += o[PairBlock::kTouch][b];
-      const std::uint32_t j = q.j[k];
-      const double rj = kin[kKinStride * j + 3];
-      double* aj = target + kAccStride * j;
-      for (int d = 0; d < 3; ++d) {
-        add_to<kAtomic>(aj[d], -o[PairBlock::kFx + d][b]);
-        add_to<kAtomic>(aj[3 + d], -(rj * o[PairBlock::kCx + d][b]) - roll[d]);
-      }
-      add_to<kAtomic>(aj[6], o[PairBlock::kTouch][b]);
+      j_side(o, k, b);
     }
+    store(i, sum);
+  }
+}
+
+// The block's outputs added to `target` (a thread's own array, or with kAtomic the shared
+// one): i's row summed in registers, then added; each j side subtracted.
+template <bool kRolling, bool kAtomic>
+inline void accumulate_shared(const double* kin, const PairList& q, std::size_t first,
+                              std::size_t last, PairBlock& blk, double* target,
+                              std::uint64_t& large, std::uint32_t& bad) {
+  auto j_side = [&](const double* const* o, std::size_t k, std::size_t b) {
+    const std::uint32_t j = q.j[k];
+    const double rj = kin[kKinStride * j + 3];
+    double* aj = target + kAccStride * j;
+    for (int d = 0; d < 3; ++d) {
+      const double roll = kRolling ? o[PairBlock::kRollX + d][b] : 0.0;
+      add_to<kAtomic>(aj[d], -o[PairBlock::kFx + d][b]);
+      add_to<kAtomic>(aj[3 + d], -(rj * o[PairBlock::kCx + d][b]) - roll);
+    }
+    add_to<kAtomic>(aj[6], o[PairBlock::kTouch][b]);
+  };
+  auto add_row = [&](std::size_t i, const double(&sum)[7]) {
     double* ai = target + kAccStride * i;
     for (int f = 0; f < 7; ++f) add_to<kAtomic>(ai[f], sum[f]);
-  }
+  };
+  sum_rows<kRolling>(q, first, last, blk, kin, large, bad, j_side, add_row);
 }
 
 // The force pass of the non-ordered accumulations (per-thread arrays, atomics): blocks of rows
@@ -294,25 +308,9 @@ template <bool kRolling>
 inline void accumulate_rows(const double* kin, const PairList& q, std::size_t first,
                             std::size_t last, PairBlock& blk, double* acc, std::uint64_t& large,
                             std::uint32_t& bad) {
-  const double* o[PairBlock::kOutputs];
-  for (int f = 0; f < PairBlock::kOutputs; ++f) o[f] = blk.out(static_cast<PairBlock::Output>(f));
-  const std::size_t k0 = q.rows[first];
-  for (std::size_t i = first; i < last; ++i) {
-    const double ri = kin[kKinStride * i + 3];
-    double sum[7] = {0, 0, 0, 0, 0, 0, 0};
-    for (std::size_t k = q.rows[i]; k < q.rows[i + 1]; ++k) {
-      const std::size_t b = k - k0;
-      large += o[PairBlock::kLarge][b] != 0.0;
-      if (o[PairBlock::kFailing][b] != 0.0) bad = std::min(bad, static_cast<std::uint32_t>(k));
-      for (int d = 0; d < 3; ++d) {
-        sum[d] += o[PairBlock::kFx + d][b];
-        sum[3 + d] -= ri * o[PairBlock::kCx + d][b];
-        if constexpr (kRolling) sum[3 + d] += o[PairBlock::kRollX + d][b];
-      }
-      sum[6] += o[PairBlock::kTouch][b];
-    }
-    std::copy(sum, sum + 7, acc + kAccStride * i);
-  }
+  sum_rows<kRolling>(
+      q, first, last, blk, kin, large, bad, [](const double* const*, std::size_t, std::size_t) {},
+      [&](std::size_t i, const double(&sum)[7]) { std::copy(sum, sum + 7, acc + kAccStride * i); });
 }
 
 // The full list's j sides: the block's packed j-side pairs (pack_pairs of j_pairs[e0 ..)),
