@@ -1,6 +1,7 @@
 // std::vector for the large arrays of the kernels (cell tables, particle arrays), backed by
 // transparent huge pages where the system offers them: the cell table of a 200^3 grid is
-// 32 MB, read at random, and with 4 KiB pages nearly every access also misses the TLB.
+// 32 MB, read at random, and with 4 KiB pages nearly every access also misses the TLB. Its
+// resize() leaves new elements uninitialised: a LargeVector is written before it is read.
 #pragma once
 
 #include <sys/mman.h>
@@ -8,6 +9,7 @@
 #include <cstddef>
 #include <cstdlib>
 #include <new>
+#include <utility>
 #include <vector>
 
 namespace contactlab {
@@ -34,6 +36,17 @@ struct HugePageAllocator {
     return static_cast<T*>(p);
   }
   void deallocate(T* p, std::size_t) noexcept { std::free(p); }
+  // resize() default-initialises (no zeroing of trivial types): every user writes all of a
+  // buffer before it reads it, and the first write, in the parallel loops, places the pages
+  // with the thread that uses them (first touch) instead of one thread's memset.
+  template <class U, class... Args>
+  void construct(U* p, Args&&... args) {
+    if constexpr (sizeof...(Args) == 0) {
+      ::new (static_cast<void*>(p)) U;
+    } else {
+      ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...);
+    }
+  }
 
   template <class U>
   bool operator==(const HugePageAllocator<U>&) const noexcept {
