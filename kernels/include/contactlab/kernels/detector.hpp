@@ -16,6 +16,7 @@
 
 #include "contactlab/kernels/cell_grid.hpp"
 #include "contactlab/kernels/contact_list.hpp"
+#include "contactlab/kernels/large_vector.hpp"
 #include "contactlab/kernels/scene.hpp"
 #include "contactlab/kernels/variant.hpp"
 
@@ -40,7 +41,8 @@ class PartnerBuffer {
   void advance(std::size_t count) { size_ += count; }
 
  private:
-  std::vector<std::uint32_t> storage_;
+  // Uninitialised growth: the thread that owns the buffer writes (and first touches) it.
+  LargeVector<std::uint32_t> storage_;
   std::size_t size_ = 0;
 };
 
