@@ -84,15 +84,7 @@ struct DemProfileCommand {
       const double t0 = omp_get_wtime();
       engine.run_steps(steps);
       const double seconds = omp_get_wtime() - t0;
-      const dem::PhaseTimes& after = engine.phase_times();
-      dem::PhaseTimes delta;
-      delta.neighbor_s = after.neighbor_s - before.neighbor_s;
-      delta.pair_forces_s = after.pair_forces_s - before.pair_forces_s;
-      delta.reduction_s = after.reduction_s - before.reduction_s;
-      delta.walls_s = after.walls_s - before.walls_s;
-      delta.update_s = after.update_s - before.update_s;
-      delta.integrate_s = after.integrate_s - before.integrate_s;
-      runs.push_back({threads, seconds, delta});
+      runs.push_back({threads, seconds, engine.phase_times() - before});
     }
     const Measured& one = runs.front();
     const double total = one.phases.total_s();

@@ -12,6 +12,7 @@
 
 #include "contactlab/kernels/detector.hpp"
 #include "contactlab/kernels/scene_generate.hpp"
+#include "contactlab/kernels/simd.hpp"
 
 namespace cl = contactlab;
 
@@ -65,6 +66,7 @@ int main(int argc, char** argv) {
     bench->Arg(1)->ArgName("threads")->UseManualTime()->Unit(benchmark::kMillisecond);
     if (cores > 1) bench->Arg(cores);
   }
+  benchmark::AddCustomContext("simd_target", cl::simd_target());
   benchmark::Initialize(&argc, argv);
   if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
   benchmark::RunSpecifiedBenchmarks();

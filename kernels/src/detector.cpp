@@ -11,7 +11,9 @@
 
 #include "contactlab/kernels/error.hpp"
 #include "contactlab/kernels/pair_test.hpp"
+#include "contactlab/kernels/simd.hpp"
 #include "contactlab/kernels/traverse.hpp"
+#include "src/simd_pair_tests.hpp"
 
 namespace contactlab {
 
@@ -39,6 +41,26 @@ struct ContactTest {
     }
   };
   ForHome for_home(std::uint32_t h) const { return {kDiameters ? d[h] : Real(0), d, reach_sq}; }
+};
+
+// The contact test of pair_test.hpp for a home's candidate slot ranges at once, on SIMD lanes
+// (simd_pair_tests.hpp): sorted layouts only, where slots are working ids.
+template <class Real, bool kDiameters>
+struct SimdContactTest {
+  const Real *x, *y, *z, *d;
+  Real reach_sq;  // D^2, without per-particle diameters
+
+  struct ForHome {
+    simd::RangeTask<Real> task;
+    std::size_t append(const SlotRange* ranges, int count, std::uint32_t* out) {
+      task.ranges = ranges;
+      task.count = count;
+      return simd::append_contacts(task, kDiameters, out);
+    }
+  };
+  ForHome for_home(std::uint32_t h) const {
+    return {{x, y, z, d, x[h], y[h], z[h], kDiameters ? d[h] : Real(0), reach_sq, nullptr, 0}};
+  }
 };
 
 // The neighbour-list test: the contact test with every diameter (or D) widened by the skin,
@@ -98,9 +120,16 @@ class ContactOp {
       next[found] = j;
       found += test(j, dx, dy, dz);
     }
+    // Tests that take whole slot ranges (SimdContactTest) are called once per home.
+    void ranges(const SlotRange* r, int count) requires
+        requires(typename PairTest::ForHome t, const SlotRange* q, std::uint32_t* o) {
+      t.append(q, 0, o);
+    }
+    { found += test.append(r, count, next + found); }
   };
   Sink begin_home(const Home& home) {
-    return {out_.tail(home.tests), 0, test_.for_home(home.particle)};
+    // The slack: the SIMD test stores whole vectors past its last find.
+    return {out_.tail(home.tests + simd::kAppendSlack), 0, test_.for_home(home.particle)};
   }
   void end_home(const Home& home, const Sink& sink) {
     out_.advance(sink.found);
@@ -159,10 +188,7 @@ void ContactDetector::detect(const CellGrid& grid, const Layout& layout, const P
   const traversal::Spec spec{grid,          registry_,     variant.loop, variant.stencil,
                              options.homes, options.blocks};
 
-  if (thread_partners_.size() < static_cast<std::size_t>(threads)) {
-    thread_partners_.resize(threads);
-    thread_homes_.resize(threads);
-  }
+  if (thread_out_.size() < static_cast<std::size_t>(threads)) thread_out_.resize(threads);
   found_count_.resize(n);
   // Ghosts are never homes: their own finds stay 0.
   if (!spec.homes.covers(n) || !spec.blocks.all())
@@ -182,9 +208,10 @@ void ContactDetector::detect(const CellGrid& grid, const Layout& layout, const P
 #pragma omp parallel num_threads(threads)
   {
     const int tid = omp_get_thread_num();
-    thread_partners_[tid].clear();
-    thread_homes_[tid].clear();
-    ContactOp<PairTest> op(test, thread_partners_[tid], thread_homes_[tid], found_count_.data());
+    detail::ThreadOutput& mine = thread_out_[tid];
+    mine.partners.clear();
+    mine.homes.clear();
+    ContactOp<PairTest> op(test, mine.partners, mine.homes, found_count_.data());
     if (options.observer) options.observer->thread_begin(tid);
     const double loop_start = omp_get_wtime();
     traversal::traverse(spec, layout, op);
@@ -205,7 +232,7 @@ void ContactDetector::detect(const CellGrid& grid, const Layout& layout, const P
 // that made it.
 void ContactDetector::assemble_rows(int tid, int threads, bool half) {
   const std::uint32_t n = static_cast<std::uint32_t>(found_count_.size());
-  const detail::PartnerBuffer& out = thread_partners_[tid];
+  const detail::PartnerBuffer& out = thread_out_[tid].partners;
   std::uint32_t* const reverse = half ? reverse_count_.data() + std::size_t{n} * tid : nullptr;
   if (half) {
     std::fill(reverse, reverse + n, 0u);
@@ -248,7 +275,7 @@ void ContactDetector::assemble_rows(int tid, int threads, bool half) {
   }
   std::uint32_t* const partners = contacts_.partners.data();
   const std::uint32_t* found = out.data();
-  for (const std::uint32_t h : thread_homes_[tid]) {
+  for (const std::uint32_t h : thread_out_[tid].homes) {
     const std::uint32_t count = found_count_[h];
     if (count == 0) continue;
     std::memcpy(partners + contacts_.offsets[h], found, count * sizeof(std::uint32_t));
@@ -346,9 +373,22 @@ void ContactDetector::with_layout(const Scene& scene, Precision precision, Detec
 DetectRun ContactDetector::run(const Scene& scene, const DetectOptions& options) {
   DetectRun run;
   const CellGrid grid = prepare(scene, options, 0.0, run);
+  const bool simd = working_is_sorted_ && simd_enabled();
   with_layout(scene, options.variant.precision, run, [&](const auto& layout) {
     using Real = typename std::remove_cvref_t<decltype(layout)>::Real;
-    if (layout.d) {
+    if (simd) {
+      const Real diameter = static_cast<Real>(options.diameter);
+      if (layout.d) {
+        detect(grid, layout,
+               SimdContactTest<Real, true>{layout.x, layout.y, layout.z, layout.d, Real(0)},
+               options, run);
+      } else {
+        detect(grid, layout,
+               SimdContactTest<Real, false>{layout.x, layout.y, layout.z, nullptr,
+                                            diameter * diameter},
+               options, run);
+      }
+    } else if (layout.d) {
       detect(grid, layout, ContactTest<Real, true>{layout.d, Real(0)}, options, run);
     } else {
       const Real diameter = static_cast<Real>(options.diameter);
@@ -383,10 +423,9 @@ ContactList ContactDetector::neighbor_list(const Scene& scene, const DetectOptio
 }
 
 void ContactDetector::release_buffers() {
-  std::vector<detail::PartnerBuffer>().swap(thread_partners_);
-  std::vector<std::vector<std::uint32_t>>().swap(thread_homes_);
-  std::vector<std::uint32_t>().swap(found_count_);
-  std::vector<std::uint32_t>().swap(reverse_count_);
+  std::vector<detail::ThreadOutput>().swap(thread_out_);
+  LargeVector<std::uint32_t>().swap(found_count_);
+  LargeVector<std::uint32_t>().swap(reverse_count_);
   sorted_.x = sorted_.y = sorted_.z = sorted_.diameter = {};
   narrow_x_ = narrow_y_ = narrow_z_ = narrow_d_ = {};
 }

@@ -9,10 +9,14 @@
 // thread counts.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cctype>
 #include <map>
 #include <string>
 #include <tuple>
 
+#include "contactlab/kernels/error.hpp"
+#include "contactlab/kernels/simd.hpp"
 #include "test_support.hpp"
 
 namespace contactlab::test {
@@ -154,6 +158,71 @@ INSTANTIATE_TEST_SUITE_P(
                        ::testing::Values(Stencil::kFull, Stencil::kHalf),
                        ::testing::Values(Precision::kDouble, Precision::kFloat)),
     param_name);
+
+// The sorted layouts' contact tests on every SIMD target this CPU runs and this build holds
+// (AVX3_DL and AVX3 = AVX-512, AVX2, SSE4, SSSE3, EMU128 or SCALAR) and on the scalar loop ("off"):
+// every scene kind, loop, sorted order, stencil and precision, two schedules, 1 and 3 threads,
+// against the brute force. (The suite above runs the default target with every schedule.)
+class SortedVariantsMatchBruteForce : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(SortedVariantsMatchBruteForce, OnThisSimdTarget) {
+  select_simd_target(GetParam());
+  EXPECT_EQ(simd_target(), GetParam() == "best" ? simd_targets().front() : GetParam());
+  int runs = 0;
+  for (const auto kind : all_scene_kinds()) {
+    const Reference& ref = reference_for(kind);
+    for (const Variant& variant : every_variant()) {
+      const Schedule& schedule = variant.schedule;
+      const bool picked = (schedule.kind == ScheduleKind::kStatic && schedule.chunk == 0) ||
+                          (schedule.kind == ScheduleKind::kDynamic && schedule.chunk == 7);
+      if (variant.order == Order::kUnsorted || !picked) continue;
+      const ContactList& expected =
+          variant.precision == Precision::kDouble ? ref.contacts : ref.float_contacts;
+      for (const int threads : {1, 3}) {
+        SCOPED_TRACE(std::string(to_string(kind)) + " " + to_string(variant) +
+                     " threads=" + std::to_string(threads));
+        const Detected d = detect(ref.scene, variant, ref.diameter, threads);
+        ++runs;
+        EXPECT_TRUE(same_contacts(d.contacts, expected));
+        EXPECT_EQ(d.run.contact_pairs, expected.pair_count());
+      }
+    }
+  }
+  EXPECT_EQ(runs, 4 * 2 * 2 * 2 * 2 * 2 * 2);  // kinds, loops, orders, stencils, precisions,
+                                               // schedules, thread counts
+  select_simd_target("best");
+}
+
+INSTANTIATE_TEST_SUITE_P(Kernels, SortedVariantsMatchBruteForce,
+                         ::testing::ValuesIn(simd_targets()),
+                         [](const ::testing::TestParamInfo<std::string>& target) {
+                           return target.param;
+                         });
+
+TEST(SimdTarget, ListsTheScalarLoopAndRefusesUnknownNames) {
+  const std::vector<std::string> targets = simd_targets();
+  ASSERT_GE(targets.size(), 2u);
+  EXPECT_EQ(targets.back(), "off");
+  // Highway's portable path (EMU128, or SCALAR where its emulation is broken) is always built.
+  const std::string portable = targets[targets.size() - 2];
+  EXPECT_TRUE(portable == "EMU128" || portable == "SCALAR") << portable;
+  try {
+    select_simd_target("avx9000");
+    FAIL() << "an unknown target was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("avx9000"), std::string::npos);
+    EXPECT_NE(std::string(e.what()).find(portable), std::string::npos);
+  }
+  select_simd_target("off");
+  EXPECT_EQ(simd_target(), "off");
+  EXPECT_FALSE(simd_enabled());
+  std::string lower = portable;
+  for (char& c : lower) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  select_simd_target(lower);  // case-insensitive
+  EXPECT_EQ(simd_target(), portable);
+  select_simd_target("best");
+  EXPECT_EQ(simd_target(), targets.front());
+}
 
 // The candidate count does not depend on the loop or the order either, and the full stencil
 // makes exactly twice the half stencil's tests (each unordered pair once from each side).

@@ -10,6 +10,7 @@
 #include <map>
 
 #include "contactlab/kernels/pair_test.hpp"
+#include "contactlab/kernels/simd.hpp"
 #include "test_support.hpp"
 
 namespace contactlab::test {
@@ -34,15 +35,24 @@ void expect_variants_match(const Scene& scene, double d, const ContactList& expe
       EXPECT_TRUE(float_errors_near_contact_distance(scene, d, float_expected, expected));
     }
     const ContactList& want = variant.precision == Precision::kFloat ? float_expected : expected;
-    for (const int t : threads) {
-      const Detected got = detect(scene, variant, d, t);
-      const auto same = same_contacts(got.contacts, want);
-      if (!same || got.run.contact_pairs != want.pair_count()) {
-        ADD_FAILURE() << to_string(variant) << " threads=" << t << ": " << same.message()
-                      << " (contact_pairs " << got.run.contact_pairs << ")";
-        if (++failures >= 5) return;
+    // The sorted layouts test on SIMD lanes: every target this CPU runs, and the scalar loop.
+    const std::vector<std::string> targets =
+        variant.order == Order::kUnsorted ? std::vector<std::string>{"best"} : simd_targets();
+    for (const std::string& target : targets) {
+      select_simd_target(target);
+      for (const int t : threads) {
+        const Detected got = detect(scene, variant, d, t);
+        const auto same = same_contacts(got.contacts, want);
+        if (!same || got.run.contact_pairs != want.pair_count()) {
+          ADD_FAILURE() << to_string(variant) << " simd=" << target << " threads=" << t << ": "
+                        << same.message() << " (contact_pairs " << got.run.contact_pairs << ")";
+          if (++failures >= 5) break;
+        }
       }
+      if (failures >= 5) break;
     }
+    select_simd_target("best");
+    if (failures >= 5) return;
   }
 }
 

@@ -262,7 +262,8 @@ TEST(ResultSchema, RunsWithoutPhasesStillRead) {
 // with their empty values).
 TEST(ResultSchema, CommittedResultFilesRead) {
   namespace fs = std::filesystem;
-  const std::set<std::string> newer{"phases", "work_counts", "executable", "code_isa"};
+  const std::set<std::string> newer{"phases", "work_counts", "executable", "code_isa",
+                                    "simd_target"};
   int files = 0;
   for (const auto& entry :
        fs::recursive_directory_iterator(fs::path(CONTACTLAB_SOURCE_DIR) / "results")) {

@@ -12,6 +12,7 @@
 #include <string_view>
 
 #include "contactlab/kernels/build_info.hpp"
+#include "contactlab/kernels/simd.hpp"
 
 #if CONTACTLAB_HAVE_HWLOC
 #include <hwloc.h>
@@ -265,6 +266,7 @@ Context collect_context(const std::string& command_line, int threads) {
   o.env_schedule = env("OMP_SCHEDULE");
   o.env_wait_policy = env("OMP_WAIT_POLICY");
   c.mpi_ranks = mpi_ranks_from_environment();
+  c.simd_target = simd_target();
   const PapiInfo& p = papi_info();
   c.papi = {p.built_with_papi,   p.initialized, p.version,        p.error,
             p.hardware_counters, p.components,  p.presets_listed, p.cache_events};

@@ -291,6 +291,7 @@ struct FieldTable<Context> {
                                              field("build", &T::build),
                                              field("openmp", &T::openmp),
                                              field("mpi_ranks", &T::mpi_ranks),
+                                             field("simd_target", &T::simd_target).may_be_absent(),
                                              field("papi", &T::papi),
                                              field("date_utc", &T::date_utc),
                                              field("command_line", &T::command_line),

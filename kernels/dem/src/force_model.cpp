@@ -163,12 +163,7 @@ ForceCosts calibrate_force_costs(const EngineFactory& make_engine, int threads,
     Timed r{{}, force_loop_work(engine->pairs(), engine->particles().size())};
     const PhaseTimes before = engine->phase_times();
     engine->run_steps(steps);
-    const PhaseTimes& after = engine->phase_times();
-    const double s = static_cast<double>(steps);
-    r.per_step.pair_forces_s = (after.pair_forces_s - before.pair_forces_s) / s;
-    r.per_step.reduction_s = (after.reduction_s - before.reduction_s) / s;
-    r.per_step.walls_s = (after.walls_s - before.walls_s) / s;
-    r.per_step.update_s = (after.update_s - before.update_s) / s;
+    r.per_step = (engine->phase_times() - before) / static_cast<double>(steps);
     ++c.calibration_runs;
     return r;
   };

@@ -164,18 +164,29 @@ void force_pass(const double* kin, std::size_t n, PairList& q, const PairCoeffic
   combine_counts(0, bad_wall_here, large, bad_wall);
 }
 
+// body(first, last) for the particles [first, last) of each block of kRowsPerBlock, the
+// blocks shared out by the variant's schedule (`omp for schedule(runtime) nowait`: the caller
+// sets the schedule and places the barrier).
+template <class Body>
+inline void for_each_block(std::size_t n, Body&& body) {
+  const std::size_t blocks = (n + kRowsPerBlock - 1) / kRowsPerBlock;
+#pragma omp for schedule(runtime) nowait
+  for (std::size_t block = 0; block < blocks; ++block) {
+    const std::size_t first = block * kRowsPerBlock;
+    body(first, std::min(n, first + kRowsPerBlock));
+  }
+}
+
 // The update (finish(a, with_walls, ...)) over the same blocks of particles as the pairs, by
 // the variant's schedule (a chunk of k is k blocks in both loops; per particle, dynamic,1
 // would pay a scheduling round trip per particle).
 template <class Finish>
 inline void update_blocks(std::size_t n, bool serial_walls, Finish& finish,
                           std::uint64_t& large_here, std::uint32_t& bad_wall_here) {
-  const std::size_t blocks = (n + kRowsPerBlock - 1) / kRowsPerBlock;
-#pragma omp for schedule(runtime)
-  for (std::size_t block = 0; block < blocks; ++block) {
-    const std::size_t first = block * kRowsPerBlock, last = std::min(n, first + kRowsPerBlock);
+  for_each_block(n, [&](std::size_t first, std::size_t last) {
     for (std::size_t a = first; a < last; ++a) finish(a, !serial_walls, large_here, bad_wall_here);
-  }
+  });
+#pragma omp barrier
 }
 
 // Adds a value to a shared sum: atomically (kAtomic: threads may add to the same particle)
@@ -266,10 +277,7 @@ void force_pass_shared(const double* kin, std::size_t n, PairList& q, const Pair
     target = thread_acc[t].data();
   }
   PairBlock blk(scratch);
-  const std::size_t blocks = (n + kRowsPerBlock - 1) / kRowsPerBlock;
-#pragma omp for schedule(runtime) nowait
-  for (std::size_t block = 0; block < blocks; ++block) {
-    const std::size_t first = block * kRowsPerBlock, last = std::min(n, first + kRowsPerBlock);
+  for_each_block(n, [&](std::size_t first, std::size_t last) {
     const std::size_t k0 = q.rows[first], k1 = q.rows[last];
     blk.reserve(k1 - k0);
     pack_rows<kRolling>(kin, q, first, last, blk, target);
@@ -279,7 +287,7 @@ void force_pass_shared(const double* kin, std::size_t n, PairList& q, const Pair
     } else {
       accumulate_shared<kRolling, false>(kin, q, first, last, blk, target, large_here, bad_here);
     }
-  }
+  });
 #pragma omp barrier
   mark(Phase::kPairs);
   if (!atomic) {  // the reduction, in thread order
@@ -351,10 +359,7 @@ void force_pass_full(const double* kin, std::size_t n, PairList& q, const PairCo
   std::uint64_t large_here = 0;
   std::uint32_t bad_here = UINT32_MAX, bad_wall_here = UINT32_MAX;
   PairBlock blk(scratch);
-  const std::size_t blocks = (n + kRowsPerBlock - 1) / kRowsPerBlock;
-#pragma omp for schedule(runtime) nowait
-  for (std::size_t block = 0; block < blocks; ++block) {
-    const std::size_t first = block * kRowsPerBlock, last = std::min(n, first + kRowsPerBlock);
+  for_each_block(n, [&](std::size_t first, std::size_t last) {
     const std::size_t k0 = q.rows[first], k1 = q.rows[last];
     const std::size_t e0 = q.j_offsets[first], e1 = q.j_offsets[last];
     blk.reserve(std::max(k1 - k0, e1 - e0));
@@ -367,7 +372,7 @@ void force_pass_full(const double* kin, std::size_t n, PairList& q, const PairCo
     if (fused) {
       for (std::size_t a = first; a < last; ++a) finish(a, true, large_here, bad_wall_here);
     }
-  }
+  });
 #pragma omp barrier
   mark(Phase::kPairs);
   mark(Phase::kReduction);

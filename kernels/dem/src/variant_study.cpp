@@ -25,10 +25,7 @@ Run run(const std::function<std::unique_ptr<Engine>(const ForceVariant&, int)>& 
   engine->run_steps(steps);
   Run r;
   r.seconds = omp_get_wtime() - t0;
-  const PhaseTimes& after = engine->phase_times();
-  r.force_seconds = (after.pair_forces_s - before.pair_forces_s) +
-                    (after.reduction_s - before.reduction_s) + (after.walls_s - before.walls_s) +
-                    (after.update_s - before.update_s);
+  r.force_seconds = (engine->phase_times() - before).force_s();
   const Particles& p = engine->particles();
   r.particles = p.size();
   std::uint32_t max_id = 0;

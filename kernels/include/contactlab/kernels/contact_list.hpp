@@ -7,11 +7,15 @@
 #include <string>
 #include <vector>
 
+#include "contactlab/kernels/large_vector.hpp"
+
 namespace contactlab {
 
+// LargeVectors: the partners of a paper-scene run are 110 MB, and resize() does not zero them
+// on one thread first (the threads that fill the rows first-touch their pages).
 struct ContactList {
-  std::vector<std::uint64_t> offsets{0};  // particle_count() + 1 entries
-  std::vector<std::uint32_t> partners;
+  LargeVector<std::uint64_t> offsets{0};  // particle_count() + 1 entries
+  LargeVector<std::uint32_t> partners;
 
   std::size_t particle_count() const { return offsets.size() - 1; }
   std::uint32_t count(std::size_t i) const {

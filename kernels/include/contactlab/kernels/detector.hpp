@@ -46,6 +46,14 @@ class PartnerBuffer {
   std::size_t size_ = 0;
 };
 
+// What one thread of the detection loop writes: its partners and the homes it visited, on
+// cache lines of its own. (Side by side, the threads' size fields shared a line, and every
+// home's append moved it between cores: two threads ran the traversal no faster than one.)
+struct alignas(64) ThreadOutput {
+  PartnerBuffer partners;
+  std::vector<std::uint32_t> homes;  // in visiting order
+};
+
 }  // namespace detail
 
 // Hooks around the detection loop, for measurement: thread hooks run on each OpenMP thread
@@ -192,10 +200,9 @@ class ContactDetector {
   bool working_is_sorted_ = false;  // working ids are slots (sorted orders) or input rows
   ContactList contacts_;
   // Per-thread partner buffers and per-particle bookkeeping, kept between runs.
-  std::vector<detail::PartnerBuffer> thread_partners_;
-  std::vector<std::vector<std::uint32_t>> thread_homes_;  // particles each thread visited, in order
-  std::vector<std::uint32_t> found_count_;                // own finds per particle
-  std::vector<std::uint32_t> reverse_count_;
+  std::vector<detail::ThreadOutput> thread_out_;
+  LargeVector<std::uint32_t> found_count_;  // own finds per particle
+  LargeVector<std::uint32_t> reverse_count_;
 };
 
 }  // namespace contactlab

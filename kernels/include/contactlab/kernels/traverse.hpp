@@ -8,6 +8,10 @@
 //   sink(j, dx, dy, dz);               // per candidate j, dx = x_home - x_j (if Op::kTestsPairs)
 //   op.end_home(home, sink);
 //
+// or, where the sink has ranges(ranges, count) (the SIMD contact test of the sorted layouts,
+// whose slots are working ids), one call per home with its candidates as slot ranges, in the
+// same order.
+//
 // The sink is a value local to the loop, so the per-candidate state of an op (the next free
 // place of a branchless append, a count) stays in registers. Ops with kTestsPairs = false see
 // only the homes (with their test counts) and no candidate is read.
@@ -23,6 +27,7 @@
 
 #include "contactlab/kernels/cell_grid.hpp"
 #include "contactlab/kernels/detector.hpp"
+#include "contactlab/kernels/slot_range.hpp"
 #include "contactlab/kernels/variant.hpp"
 
 namespace contactlab::traversal {
@@ -56,10 +61,6 @@ inline StencilRows make_stencil(Stencil stencil) {
   }
   return result;
 }
-
-struct SlotRange {
-  std::uint32_t begin, end;
-};
 
 // The particles of a home cell's stencil as slot ranges, ranges[own] holding the home cell.
 // With the half stencil ranges[own] starts at the home cell (no stencil cell precedes it).
@@ -170,24 +171,41 @@ struct Home {
 template <bool kHalf, class Layout, class Sink>
 inline void for_each_candidate(const Layout& layout, const NeighbourRanges& nb, std::uint32_t h,
                                std::uint32_t s_h, Sink& sink) {
-  using Real = typename Layout::Real;
-  const Real xi = layout.x[h], yi = layout.y[h], zi = layout.z[h];
-  auto visit_range = [&](std::uint32_t begin, std::uint32_t end) {
-    for (std::uint32_t s = begin; s < end; ++s) {
-      const std::uint32_t j = layout.particle_at(s);
-      sink(j, xi - layout.x[j], yi - layout.y[j], zi - layout.z[j]);
+  if constexpr (requires(const SlotRange* r) { sink.ranges(r, 0); }) {
+    std::array<SlotRange, 28> ranges;  // the own range may be split around the home
+    int count = 0;
+    for (int r = 0; r < nb.count; ++r) {
+      const SlotRange range = nb.ranges[r];
+      if (r != nb.own) {
+        ranges[count++] = range;
+      } else if constexpr (kHalf) {
+        ranges[count++] = {s_h + 1, range.end};
+      } else {
+        ranges[count++] = {range.begin, s_h};
+        ranges[count++] = {s_h + 1, range.end};
+      }
     }
-  };
-  for (int r = 0; r < nb.count; ++r) {
-    const SlotRange range = nb.ranges[r];
-    if (r != nb.own) {
-      visit_range(range.begin, range.end);
-    } else if constexpr (kHalf) {
-      // The range starts at the home cell: only its later slots and the cells after it.
-      visit_range(s_h + 1, range.end);
-    } else {
-      visit_range(range.begin, s_h);
-      visit_range(s_h + 1, range.end);
+    sink.ranges(ranges.data(), count);
+  } else {
+    using Real = typename Layout::Real;
+    const Real xi = layout.x[h], yi = layout.y[h], zi = layout.z[h];
+    auto visit_range = [&](std::uint32_t begin, std::uint32_t end) {
+      for (std::uint32_t s = begin; s < end; ++s) {
+        const std::uint32_t j = layout.particle_at(s);
+        sink(j, xi - layout.x[j], yi - layout.y[j], zi - layout.z[j]);
+      }
+    };
+    for (int r = 0; r < nb.count; ++r) {
+      const SlotRange range = nb.ranges[r];
+      if (r != nb.own) {
+        visit_range(range.begin, range.end);
+      } else if constexpr (kHalf) {
+        // The range starts at the home cell: only its later slots and the cells after it.
+        visit_range(s_h + 1, range.end);
+      } else {
+        visit_range(range.begin, s_h);
+        visit_range(s_h + 1, range.end);
+      }
     }
   }
 }

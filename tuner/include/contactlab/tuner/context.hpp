@@ -76,6 +76,9 @@ struct Context {
   BuildRecord build;
   OpenMpInfo openmp;
   int mpi_ranks = 1;
+  // The SIMD target of the sorted layouts' contact tests (contactlab/kernels/simd.hpp): the
+  // best the CPU offers unless CONTACTLAB_SIMD chose another. Absent in files written before.
+  std::string simd_target;
   PapiContext papi;
   std::string date_utc;  // ISO 8601
   std::string command_line;

@@ -59,6 +59,19 @@ struct PhaseTimes {
   double total_s() const {
     return neighbor_s + pair_forces_s + reduction_s + walls_s + update_s + integrate_s;
   }
+  // The force pass: everything between two integrations but the neighbour list.
+  double force_s() const { return pair_forces_s + reduction_s + walls_s + update_s; }
+  // Phase by phase: `after - before` is the time of the steps between two readings, and
+  // `/ steps` their time per step.
+  friend PhaseTimes operator-(const PhaseTimes& a, const PhaseTimes& b) {
+    return {a.neighbor_s - b.neighbor_s,   a.pair_forces_s - b.pair_forces_s,
+            a.reduction_s - b.reduction_s, a.walls_s - b.walls_s,
+            a.update_s - b.update_s,       a.integrate_s - b.integrate_s};
+  }
+  friend PhaseTimes operator/(const PhaseTimes& a, double divisor) {
+    return {a.neighbor_s / divisor, a.pair_forces_s / divisor, a.reduction_s / divisor,
+            a.walls_s / divisor,    a.update_s / divisor,      a.integrate_s / divisor};
+  }
 };
 
 struct Energies {

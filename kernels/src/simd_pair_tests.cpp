@@ -1,0 +1,222 @@
+// The SIMD contact test (simd_pair_tests.hpp), compiled once per Highway target by
+// foreach_target.h, and the process-wide choice of target (simd.hpp).
+//
+// Per vector of candidates: the distances of pair_test.hpp lane by lane (Mul, Add: no fused
+// multiply-add, as -ffp-contract=off keeps the scalar test), the contact mask, and the slots
+// that hit compressed to the front of a vector and stored whole (a compressing store to memory
+// is microcoded on some AVX-512 CPUs); the count advances by the hits, as the scalar
+// branchless append does.
+#include "src/simd_pair_tests.hpp"
+
+#ifndef CONTACTLAB_NO_SIMD
+// Every target Highway attains (not only those above the build's baseline): with -march=native
+// the AVX2, SSE4 and EMU128 paths are compiled too, so tests run each of them.
+// AVX3_DL (AVX-512 with VBMI2, VNNI, ...) too: on such CPUs it is the native build's baseline.
+#define HWY_COMPILE_ALL_ATTAINABLE
+#define HWY_WANT_AVX3_DL
+#undef HWY_TARGET_INCLUDE
+#define HWY_TARGET_INCLUDE "src/simd_pair_tests.cpp"
+#include <hwy/foreach_target.h>  // IWYU pragma: keep
+#include <hwy/highway.h>
+
+HWY_BEFORE_NAMESPACE();
+namespace contactlab::simd {
+namespace HWY_NAMESPACE {
+namespace hn = hwy::HWY_NAMESPACE;
+
+template <bool kDiameters, class Real>
+std::size_t Append(const RangeTask<Real>& task, std::uint32_t* HWY_RESTRICT out) {
+  const hn::ScalableTag<Real> d;
+  const hn::Rebind<std::uint32_t, decltype(d)> du;  // a slot per coordinate lane
+  const std::size_t lanes = hn::Lanes(d);
+  const auto xi = hn::Set(d, task.xi), yi = hn::Set(d, task.yi), zi = hn::Set(d, task.zi);
+  const auto reach_sq = hn::Set(d, task.reach_sq), di = hn::Set(d, task.di);
+  const auto four = hn::Set(d, Real(4));
+  std::size_t found = 0;
+  for (int r = 0; r < task.count; ++r) {
+    const std::uint32_t end = task.ranges[r].end;
+    for (std::uint32_t s = task.ranges[r].begin; s < end; s += static_cast<std::uint32_t>(lanes)) {
+      const auto valid = hn::FirstN(d, end - s);
+      const auto dx = hn::Sub(xi, hn::MaskedLoad(valid, d, task.x + s));
+      const auto dy = hn::Sub(yi, hn::MaskedLoad(valid, d, task.y + s));
+      const auto dz = hn::Sub(zi, hn::MaskedLoad(valid, d, task.z + s));
+      const auto dist_sq = hn::Add(hn::Add(hn::Mul(dx, dx), hn::Mul(dy, dy)), hn::Mul(dz, dz));
+      auto hit = hn::Le(dist_sq, reach_sq);
+      if constexpr (kDiameters) {
+        const auto sum = hn::Add(di, hn::MaskedLoad(valid, d, task.d + s));
+        hit = hn::Le(hn::Mul(four, dist_sq), hn::Mul(sum, sum));
+      }
+      hit = hn::And(hit, valid);
+      decltype(hn::FirstN(du, 0)) slot_hit;
+      if constexpr (sizeof(Real) == sizeof(std::uint32_t)) {
+        slot_hit = hn::RebindMask(du, hit);
+      } else {  // double lanes: the mask by its bits onto the half-width slot vector
+        std::uint8_t bits[HWY_MAX_BYTES / 8 + 8] = {};
+        hn::StoreMaskBits(d, hit, bits);
+        slot_hit = hn::LoadMaskBits(du, bits);
+      }
+      hn::StoreU(hn::Compress(hn::Iota(du, s), slot_hit), du, out + found);
+      found += hn::CountTrue(du, slot_hit);
+    }
+  }
+  return found;
+}
+
+std::size_t AppendDouble(const RangeTask<double>& task, std::uint32_t* out) {
+  return Append<false>(task, out);
+}
+std::size_t AppendDoubleDiameters(const RangeTask<double>& task, std::uint32_t* out) {
+  return Append<true>(task, out);
+}
+std::size_t AppendFloat(const RangeTask<float>& task, std::uint32_t* out) {
+  return Append<false>(task, out);
+}
+std::size_t AppendFloatDiameters(const RangeTask<float>& task, std::uint32_t* out) {
+  return Append<true>(task, out);
+}
+std::int64_t Target() { return HWY_TARGET; }
+
+}  // namespace HWY_NAMESPACE
+}  // namespace contactlab::simd
+HWY_AFTER_NAMESPACE();
+
+#if HWY_ONCE
+#include <algorithm>
+#include <atomic>
+#include <cctype>
+#include <cstdlib>
+#include <mutex>
+
+#include "contactlab/kernels/error.hpp"
+#include "contactlab/kernels/simd.hpp"
+
+namespace contactlab {
+namespace simd {
+
+HWY_EXPORT(AppendDouble);
+HWY_EXPORT(AppendDoubleDiameters);
+HWY_EXPORT(AppendFloat);
+HWY_EXPORT(AppendFloatDiameters);
+HWY_EXPORT(Target);
+
+std::size_t append_contacts(const RangeTask<double>& task, bool diameters, std::uint32_t* out) {
+  return diameters ? HWY_DYNAMIC_DISPATCH(AppendDoubleDiameters)(task, out)
+                   : HWY_DYNAMIC_DISPATCH(AppendDouble)(task, out);
+}
+std::size_t append_contacts(const RangeTask<float>& task, bool diameters, std::uint32_t* out) {
+  return diameters ? HWY_DYNAMIC_DISPATCH(AppendFloatDiameters)(task, out)
+                   : HWY_DYNAMIC_DISPATCH(AppendFloat)(task, out);
+}
+
+namespace {
+
+std::int64_t current_target() { return HWY_DYNAMIC_DISPATCH(Target)(); }
+
+std::atomic<bool> scalar_only{false};
+std::once_flag environment_read;
+
+// The targets of the CPU and the build, read before any selection narrows what Highway reports.
+const std::vector<std::int64_t>& available() {
+  static const std::vector<std::int64_t> targets = hwy::SupportedAndGeneratedTargets();
+  return targets;
+}
+
+std::string upper(std::string_view text) {
+  std::string s(text);
+  for (char& c : s) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+  return s;
+}
+
+void select(std::string_view name) {
+  const std::string wanted = upper(name);
+  if (wanted == "OFF") {
+    scalar_only = true;
+    return;
+  }
+  hwy::SetSupportedTargetsForTest(0);  // the CPU's own list again
+  if (wanted == "BEST") {
+    scalar_only = false;
+    return;
+  }
+  for (const std::int64_t target : available()) {
+    if (upper(hwy::TargetName(target)) == wanted) {
+      hwy::SetSupportedTargetsForTest(target);
+      scalar_only = false;
+      return;
+    }
+  }
+  std::string choices;
+  for (const std::string& t : simd_targets()) choices += (choices.empty() ? "" : ", ") + t;
+  throw InputError("SIMD target '" + std::string(name) +
+                   "' is not available here (choices: best, " + choices + ")");
+}
+
+void read_environment() {
+  available();
+  std::call_once(environment_read, [] {
+    if (const char* name = std::getenv("CONTACTLAB_SIMD")) {
+      try {
+        select(name);
+      } catch (const InputError& e) {
+        throw InputError(std::string("CONTACTLAB_SIMD: ") + e.what());
+      }
+    }
+  });
+}
+
+}  // namespace
+}  // namespace simd
+
+std::string simd_target() {
+  simd::read_environment();
+  if (simd::scalar_only) return "off";
+  return hwy::TargetName(simd::current_target());
+}
+
+std::vector<std::string> simd_targets() {
+  std::vector<std::string> names;
+  for (const std::int64_t target : simd::available()) {
+    names.emplace_back(hwy::TargetName(target));
+  }
+  names.emplace_back("off");
+  return names;
+}
+
+void select_simd_target(std::string_view name) {
+  simd::read_environment();
+  simd::select(name);
+}
+
+bool simd_enabled() {
+  simd::read_environment();
+  return !simd::scalar_only;
+}
+
+}  // namespace contactlab
+#endif  // HWY_ONCE
+
+#else  // CONTACTLAB_NO_SIMD: the scalar loop only (the program valgrind simulates: libhwy's
+       // start-up code reads the time stamp counter with rdtscp, which valgrind cannot run).
+#include "contactlab/kernels/error.hpp"
+#include "contactlab/kernels/simd.hpp"
+
+namespace contactlab {
+namespace simd {
+std::size_t append_contacts(const RangeTask<double>&, bool, std::uint32_t*) {
+  throw InputError("this build has no SIMD contact tests");
+}
+std::size_t append_contacts(const RangeTask<float>&, bool, std::uint32_t*) {
+  throw InputError("this build has no SIMD contact tests");
+}
+}  // namespace simd
+std::string simd_target() { return "off"; }
+std::vector<std::string> simd_targets() { return {"off"}; }
+void select_simd_target(std::string_view name) {
+  if (name != "off" && name != "best") {
+    throw InputError("SIMD target '" + std::string(name) +
+                     "' is not available here (choices: best, off: this build has no SIMD)");
+  }
+}
+bool simd_enabled() { return false; }
+}  // namespace contactlab
+#endif  // CONTACTLAB_NO_SIMD
