@@ -16,7 +16,7 @@ namespace contactlab::cli {
 void SceneOptions::add_to(CLI::App& app, bool with_input) {
   if (with_input) app.add_option("--input", input_, "particle file (text x,y,z[,d] or binary)");
   app.add_option(with_input ? "--scene" : "--kind", kind_,
-                 "generated scene: uniform, clustered, blobs, polydisperse");
+                 "generated scene: uniform, clustered, blobs, polydisperse, core");
   app.add_option("--diameter,-D", diameter_, "particle diameter D (contact distance)")
       ->each([this](const std::string&) { diameter_given_ = true; });
   // The generator's numbers: the same table gives the experiment configs their keys.

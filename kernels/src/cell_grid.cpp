@@ -55,7 +55,8 @@ CellGrid::CellGrid(const Box& box, double min_width, CellNumbering numbering)
   }
 }
 
-void CellRegistry::assign(const CellGrid& grid, const Scene& scene, Scene* sorted, int threads) {
+void CellRegistry::assign(const CellGrid& grid, const Scene& scene, SortedCoordinates* sorted,
+                          int threads) {
   const std::size_t n = scene.size();
   const std::uint64_t keys = grid.key_count();
   // Sort (key, input index) pairs by key with a stable LSD radix sort. A counting sort over
@@ -134,7 +135,6 @@ void CellRegistry::assign(const CellGrid& grid, const Scene& scene, Scene* sorte
 
   if (sorted) {
     // The paper's reordering: coordinates copied into slot order.
-    sorted->box = scene.box;
     sorted->x.resize(n);
     sorted->y.resize(n);
     sorted->z.resize(n);

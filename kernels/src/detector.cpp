@@ -4,10 +4,13 @@
 #include "contactlab/kernels/detector.hpp"
 
 #include <omp.h>
+#include <sys/mman.h>
 
 #include <algorithm>
 #include <cstring>
+#include <new>
 #include <type_traits>
+#include <utility>
 
 #include "contactlab/kernels/error.hpp"
 #include "contactlab/kernels/pair_test.hpp"
@@ -18,6 +21,43 @@
 namespace contactlab {
 
 int resolve_threads(int requested) { return requested > 0 ? requested : omp_get_max_threads(); }
+
+namespace detail {
+
+PartnerBuffer::PartnerBuffer(PartnerBuffer&& other) noexcept
+    : data_(std::exchange(other.data_, nullptr)),
+      size_(std::exchange(other.size_, 0)),
+      capacity_(std::exchange(other.capacity_, 0)) {}
+
+PartnerBuffer& PartnerBuffer::operator=(PartnerBuffer&& other) noexcept {
+  if (this != &other) {
+    this->~PartnerBuffer();
+    data_ = std::exchange(other.data_, nullptr);
+    size_ = std::exchange(other.size_, 0);
+    capacity_ = std::exchange(other.capacity_, 0);
+  }
+  return *this;
+}
+
+PartnerBuffer::~PartnerBuffer() {
+  if (data_) ::munmap(data_, capacity_ * sizeof(std::uint32_t));
+}
+
+void PartnerBuffer::grow(std::size_t entries) {
+  constexpr std::size_t kHugePage = std::size_t{2} << 20;
+  const std::size_t wanted = std::max(2 * capacity_, entries) * sizeof(std::uint32_t);
+  const std::size_t bytes = (wanted + kHugePage - 1) / kHugePage * kHugePage;
+  const std::size_t old_bytes = capacity_ * sizeof(std::uint32_t);
+  void* p =
+      data_ ? ::mremap(data_, old_bytes, bytes, MREMAP_MAYMOVE)
+            : ::mmap(nullptr, bytes, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
+  if (p == MAP_FAILED) throw std::bad_alloc();
+  ::madvise(p, bytes, MADV_HUGEPAGE);  // advice only
+  data_ = static_cast<std::uint32_t*>(p);
+  capacity_ = bytes / sizeof(std::uint32_t);
+}
+
+}  // namespace detail
 namespace {
 
 using traversal::Home;
@@ -330,7 +370,13 @@ CellGrid ContactDetector::prepare(const Scene& scene, const DetectOptions& optio
 // Calls f(layout) with the prepared particles in the working order and the given precision.
 template <class F>
 void ContactDetector::with_layout(const Scene& scene, Precision precision, DetectRun& run, F&& f) {
-  const Scene& source = working_is_sorted_ ? sorted_ : scene;  // coordinates in working order
+  struct Source {  // the coordinates in working order
+    const double *x, *y, *z, *diameter;
+  };
+  const Source source =
+      working_is_sorted_
+          ? Source{sorted_.x.data(), sorted_.y.data(), sorted_.z.data(), sorted_.diameter.data()}
+          : Source{scene.x.data(), scene.y.data(), scene.z.data(), scene.diameter.data()};
   const bool diameters = scene.has_diameters();
   auto run_with = [&](const auto& coordinates) {
     using Real = std::remove_cvref_t<decltype(*coordinates.x)>;
@@ -342,16 +388,15 @@ void ContactDetector::with_layout(const Scene& scene, Precision precision, Detec
     }
   };
   if (precision == Precision::kDouble) {
-    run_with(traversal::Coordinates<double>{source.x.data(), source.y.data(), source.z.data(),
-                                            source.x.data(), source.y.data(), source.z.data(),
-                                            diameters ? source.diameter.data() : nullptr});
+    run_with(traversal::Coordinates<double>{source.x, source.y, source.z, source.x, source.y,
+                                            source.z, diameters ? source.diameter : nullptr});
     return;
   }
   // Single precision, relative to the box's lower corner (absolute coordinates far from the
   // origin would lose most of their float digits). The conversion is part of the setup, as a
   // code keeping float coordinates would do it once when they change.
   const double convert_start = omp_get_wtime();
-  const std::size_t n = source.size();
+  const std::size_t n = scene.size();
   const auto& lo = scene.box.lo;
   narrow_x_.resize(n);
   narrow_y_.resize(n);
@@ -365,8 +410,8 @@ void ContactDetector::with_layout(const Scene& scene, Precision precision, Detec
     if (diameters) narrow_d_[i] = static_cast<float>(source.diameter[i]);
   }
   run.setup_s += omp_get_wtime() - convert_start;
-  run_with(traversal::Coordinates<float>{source.x.data(), source.y.data(), source.z.data(),
-                                         narrow_x_.data(), narrow_y_.data(), narrow_z_.data(),
+  run_with(traversal::Coordinates<float>{source.x, source.y, source.z, narrow_x_.data(),
+                                         narrow_y_.data(), narrow_z_.data(),
                                          diameters ? narrow_d_.data() : nullptr});
 }
 
@@ -426,7 +471,7 @@ void ContactDetector::release_buffers() {
   std::vector<detail::ThreadOutput>().swap(thread_out_);
   LargeVector<std::uint32_t>().swap(found_count_);
   LargeVector<std::uint32_t>().swap(reverse_count_);
-  sorted_.x = sorted_.y = sorted_.z = sorted_.diameter = {};
+  sorted_ = {};
   narrow_x_ = narrow_y_ = narrow_z_ = narrow_d_ = {};
 }
 

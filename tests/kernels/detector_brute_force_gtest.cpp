@@ -55,6 +55,10 @@ KindSetup setup_for(SceneKind kind) {
       setup.spec.diameter = 0.1;
       setup.spec.size_ratio = 4.0;
       break;
+    case SceneKind::kCore:
+      setup.spec.n = 2000;
+      setup.spec.diameter = 0.02;
+      break;
   }
   setup.diameter = setup.spec.diameter;
   return setup;
@@ -152,7 +156,8 @@ std::string param_name(const ::testing::TestParamInfo<Params>& info) {
 INSTANTIATE_TEST_SUITE_P(
     Kernels, EveryVariantMatchesBruteForce,
     ::testing::Combine(::testing::Values(SceneKind::kUniform, SceneKind::kClustered,
-                                         SceneKind::kBlobs, SceneKind::kPolydisperse),
+                                         SceneKind::kBlobs, SceneKind::kPolydisperse,
+                                         SceneKind::kCore),
                        ::testing::Values(LoopKind::kCell, LoopKind::kParticle),
                        ::testing::Values(Order::kUnsorted, Order::kSorted, Order::kMorton),
                        ::testing::Values(Stencil::kFull, Stencil::kHalf),
@@ -188,7 +193,7 @@ TEST_P(SortedVariantsMatchBruteForce, OnThisSimdTarget) {
       }
     }
   }
-  EXPECT_EQ(runs, 4 * 2 * 2 * 2 * 2 * 2 * 2);  // kinds, loops, orders, stencils, precisions,
+  EXPECT_EQ(runs, 5 * 2 * 2 * 2 * 2 * 2 * 2);  // kinds, loops, orders, stencils, precisions,
                                                // schedules, thread counts
   select_simd_target("best");
 }

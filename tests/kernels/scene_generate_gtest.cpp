@@ -47,6 +47,7 @@ TEST(SceneGenerate, ChecksumsArePinned) {
   EXPECT_EQ(scene_checksum(generate_scene(pinned_spec(SceneKind::kBlobs))), 0x2d6d955e26903b6aULL);
   EXPECT_EQ(scene_checksum(generate_scene(pinned_spec(SceneKind::kPolydisperse))),
             0xf4282586e6eef37bULL);
+  EXPECT_EQ(scene_checksum(generate_scene(pinned_spec(SceneKind::kCore))), 0xa57b67b0fc88128bULL);
 }
 
 TEST(SceneGenerate, SameSpecGivesIdenticalScenes) {
@@ -218,13 +219,14 @@ TEST(SceneGenerate, InvalidSpecsThrow) {
 
 TEST(SceneGenerate, KindNames) {
   const auto kinds = all_scene_kinds();
-  ASSERT_EQ(kinds.size(), 4u);
+  ASSERT_EQ(kinds.size(), 5u);
   std::set<std::string> names;
   for (const auto kind : kinds) {
     names.insert(std::string(to_string(kind)));
     EXPECT_EQ(parse_scene_kind(to_string(kind)), kind);
   }
-  EXPECT_EQ(names, (std::set<std::string>{"uniform", "clustered", "blobs", "polydisperse"}));
+  EXPECT_EQ(names,
+            (std::set<std::string>{"uniform", "clustered", "blobs", "polydisperse", "core"}));
   for (const char* text : {"", "Uniform", "uniform ", "blob", "poly"}) {
     EXPECT_THROW(parse_scene_kind(text), InputError) << "'" << text << "'";
   }

@@ -75,6 +75,13 @@ class CellGrid {
   std::uint64_t key_count_ = 1;
 };
 
+// Coordinates (and diameters, where the scene has them) in slot order: the paper's reordering.
+// LargeVectors: filled, and their pages first touched, by the registering threads.
+struct SortedCoordinates {
+  LargeVector<double> x, y, z, diameter;
+  std::size_t size() const { return x.size(); }
+};
+
 // Particles registered in cells (sorted by cell key, stably): the particles of the cell with key k
 // occupy slots [cell_begin[k], cell_begin[k + 1]), and slot s holds input particle
 // slot_particle[s].
@@ -89,7 +96,8 @@ struct CellRegistry {
   // unsorted layout needs it; sorted ones use slots as ids). Runs on `threads` threads (keys,
   // the radix sort's passes, the cell table, the reordering); the result is the same for any
   // thread count.
-  void assign(const CellGrid& grid, const Scene& scene, Scene* sorted = nullptr, int threads = 1);
+  void assign(const CellGrid& grid, const Scene& scene, SortedCoordinates* sorted = nullptr,
+              int threads = 1);
 
  private:
   LargeVector<std::uint64_t> sort_buffer_, sort_scratch_;  // (key << 32 | index) pairs

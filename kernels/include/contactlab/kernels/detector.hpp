@@ -26,24 +26,30 @@ namespace detail {
 
 // Appends partners without a branch per test: each candidate is written to the next free
 // place and the size advances only on contact (a contact is ~1 candidate in 6, so a branch
-// would mispredict often).
+// would mispredict often). The storage is anonymous memory that grows by mremap: pages move
+// without a copy, and only those the owning thread writes are ever touched (a doubling
+// vector copied and first-touched about twice the final size, the bulk of a first run's cost).
 class PartnerBuffer {
  public:
+  PartnerBuffer() = default;
+  PartnerBuffer(PartnerBuffer&& other) noexcept;
+  PartnerBuffer& operator=(PartnerBuffer&& other) noexcept;
+  ~PartnerBuffer();
+
   std::size_t size() const { return size_; }
-  const std::uint32_t* data() const { return storage_.data(); }
+  const std::uint32_t* data() const { return data_; }
   void clear() { size_ = 0; }
   // Room for `extra` more entries at the end.
   std::uint32_t* tail(std::size_t extra) {
-    if (size_ + extra > storage_.size())
-      storage_.resize(std::max(2 * storage_.size(), size_ + extra));
-    return storage_.data() + size_;
+    if (size_ + extra > capacity_) grow(size_ + extra);
+    return data_ + size_;
   }
   void advance(std::size_t count) { size_ += count; }
 
  private:
-  // Uninitialised growth: the thread that owns the buffer writes (and first touches) it.
-  LargeVector<std::uint32_t> storage_;
-  std::size_t size_ = 0;
+  void grow(std::size_t entries);
+  std::uint32_t* data_ = nullptr;
+  std::size_t size_ = 0, capacity_ = 0;  // entries
 };
 
 // What one thread of the detection loop writes: its partners and the homes it visited, on
@@ -195,7 +201,7 @@ class ContactDetector {
 
   std::vector<std::uint64_t> range_sums_;  // assemble_rows: each thread's rows, summed
   CellRegistry registry_;
-  Scene sorted_;  // coordinates in slot order, for the sorted orders
+  SortedCoordinates sorted_;  // coordinates in slot order, for the sorted orders
   LargeVector<float> narrow_x_, narrow_y_, narrow_z_, narrow_d_;  // single-precision copies
   bool working_is_sorted_ = false;  // working ids are slots (sorted orders) or input rows
   ContactList contacts_;

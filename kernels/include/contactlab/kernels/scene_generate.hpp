@@ -12,7 +12,8 @@
 
 namespace contactlab {
 
-enum class SceneKind { kUniform, kClustered, kBlobs, kPolydisperse };
+// core: per axis 0.5 + 0.5 sign(u) |u|^3 of the box (u uniform in [-1, 1]), an extreme centre.
+enum class SceneKind { kUniform, kClustered, kBlobs, kPolydisperse, kCore };
 
 std::string_view to_string(SceneKind kind);
 SceneKind parse_scene_kind(std::string_view text);  // throws InputError

@@ -33,7 +33,7 @@ RunStatus parse_run_status(std::string_view text);  // throws InputError
 
 // Where the particles came from: a generator and its parameters, or a file.
 struct SceneRecord {
-  std::string kind;                 // uniform, clustered, blobs, polydisperse, file
+  std::string kind;                 // uniform, clustered, blobs, polydisperse, core, file
   std::optional<std::string> path;  // file scenes
   std::uint64_t n = 0;
   std::optional<double> diameter;     // null when the particles carry their own diameters
