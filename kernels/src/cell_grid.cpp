@@ -80,7 +80,9 @@ void CellRegistry::assign(const CellGrid& grid, const Scene& scene, SortedCoordi
   std::uint32_t largest = 0;
   std::uint64_t* from = sort_buffer_.data();
   std::uint64_t* to = sort_scratch_.data();
-#pragma omp parallel num_threads(static_cast <int>(team)) reduction(max : largest)
+  std::uint64_t squares = 0;
+#pragma omp parallel num_threads(static_cast <int>(team)) reduction(max : largest) \
+    reduction(+ : squares)
   {
     const auto t = static_cast<std::size_t>(omp_get_thread_num());
     const std::size_t size = static_cast<std::size_t>(omp_get_num_threads());
@@ -124,6 +126,7 @@ void CellRegistry::assign(const CellGrid& grid, const Scene& scene, SortedCoordi
       std::size_t end = s + 1;  // the cell's run, possibly into the next thread's range
       while (end < n && (in[end] >> 32) == slot_key) ++end;
       largest = std::max(largest, static_cast<std::uint32_t>(end - s));
+      squares += std::uint64_t{end - s} * (end - s);
     }
     if (t + 1 == size) {  // the keys past the last particle's (all of them when there is none)
       const std::uint64_t after = n == 0 ? 0 : (in[n - 1] >> 32) + 1;
@@ -132,6 +135,7 @@ void CellRegistry::assign(const CellGrid& grid, const Scene& scene, SortedCoordi
   }
   if (passes % 2 == 1) sort_buffer_.swap(sort_scratch_);  // the sorted entries' vector first
   max_occupancy = largest;
+  occupancy_squares = squares;
 
   if (sorted) {
     // The paper's reordering: coordinates copied into slot order.

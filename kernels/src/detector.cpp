@@ -1,6 +1,6 @@
 // Contact detection, per-iteration work and neighbour lists: each is the traversal of
-// traverse.hpp with its own pair op (ContactOp with the contact or the neighbour test, or
-// WorkCountOp), and the CSR rows are assembled after the traversal.
+// traverse.hpp with its own pair op (src/pair_ops.hpp: ContactOp with the contact or the neighbour
+// test, or WorkCountOp), and the CSR rows are assembled after the traversal.
 #include "contactlab/kernels/detector.hpp"
 
 #include <omp.h>
@@ -13,10 +13,9 @@
 #include <utility>
 
 #include "contactlab/kernels/error.hpp"
-#include "contactlab/kernels/pair_test.hpp"
 #include "contactlab/kernels/simd.hpp"
 #include "contactlab/kernels/traverse.hpp"
-#include "src/simd_pair_tests.hpp"
+#include "src/pair_ops.hpp"
 
 namespace contactlab {
 
@@ -60,177 +59,11 @@ void PartnerBuffer::grow(std::size_t entries) {
 }  // namespace detail
 namespace {
 
-using traversal::Home;
-
-// The contact test of pair_test.hpp, for one home at a time.
-template <class Real, bool kDiameters>
-struct ContactTest {
-  const Real* d;
-  Real reach_sq;  // D^2, without per-particle diameters
-
-  struct ForHome {
-    Real di;
-    const Real* d;
-    Real reach_sq;
-    bool operator()(std::uint32_t j, Real dx, Real dy, Real dz) const {
-      if constexpr (kDiameters) {
-        return in_contact(dx, dy, dz, di, d[j]);
-      } else {
-        return in_contact(dx, dy, dz, reach_sq);
-      }
-    }
-  };
-  ForHome for_home(std::uint32_t h) const { return {kDiameters ? d[h] : Real(0), d, reach_sq}; }
-};
-
-// The contact test of pair_test.hpp for a home's candidate slot ranges at once, on SIMD lanes
-// (simd_pair_tests.hpp): sorted layouts only, where slots are working ids.
-template <class Real, bool kDiameters>
-struct SimdContactTest {
-  const Real *x, *y, *z, *d;
-  Real reach_sq;  // D^2, without per-particle diameters
-
-  // Homes with fewer candidates than this are tested in the scalar loop: for a sparse scene
-  // (uniform, D = 1/200: 3-4 candidates a home) a dispatched call and a masked vector per
-  // near-empty range cost more than the tests (measured 10-17 % slower at one thread).
-  static constexpr std::uint64_t kScalarBelow = 16;
-
-  struct ForHome {
-    simd::RangeTask<Real> task;
-    std::uint64_t candidates;
-    std::size_t append(const SlotRange* ranges, int count, std::uint32_t* out) {
-      if (candidates < kScalarBelow) {  // the same test, so the same contacts, bit for bit
-        std::size_t found = 0;
-        for (int r = 0; r < count; ++r) {
-          for (std::uint32_t j = ranges[r].begin; j < ranges[r].end; ++j) {
-            const Real dx = task.xi - task.x[j], dy = task.yi - task.y[j], dz = task.zi - task.z[j];
-            out[found] = j;
-            if constexpr (kDiameters) {
-              found += in_contact(dx, dy, dz, task.di, task.d[j]);
-            } else {
-              found += in_contact(dx, dy, dz, task.reach_sq);
-            }
-          }
-        }
-        return found;
-      }
-      task.ranges = ranges;
-      task.count = count;
-      return simd::append_contacts(task, kDiameters, out);
-    }
-  };
-  ForHome for_home(std::uint32_t h, std::uint64_t candidates) const {
-    return {{x, y, z, d, x[h], y[h], z[h], kDiameters ? d[h] : Real(0), reach_sq, nullptr, 0},
-            candidates};
-  }
-};
-
-// The neighbour-list test: the contact test with every diameter (or D) widened by the skin,
-// keeping each pair once (see ContactDetector::neighbor_list).
-template <class Layout, bool kDiameters>
-struct NeighborTest {
-  using Real = typename Layout::Real;
-  const Layout* layout;
-  Real reach_sq;  // (D + skin)^2, without per-particle diameters
-  Real skin;
-  HomeRange homes;
-
-  struct ForHome {
-    Real di;  // d_i + skin
-    const Layout* layout;
-    Real reach_sq, skin;
-    HomeRange homes;
-    std::uint32_t input;  // the home's input row
-    bool operator()(std::uint32_t j, Real dx, Real dy, Real dz) const {
-      const std::uint32_t other = layout->input_of(j);
-      // `&`, not `&&`: no branch in the hot loop.
-      const bool once = other > input || !homes.contains(other);
-      if constexpr (kDiameters) {
-        return once & in_contact(dx, dy, dz, di, layout->d[j] + skin);
-      } else {
-        return once & in_contact(dx, dy, dz, reach_sq);
-      }
-    }
-  };
-  ForHome for_home(std::uint32_t h) const {
-    return {kDiameters ? layout->d[h] + skin : Real(0),
-            layout,
-            reach_sq,
-            skin,
-            homes,
-            layout->input_of(h)};
-  }
-};
-
-// Appends each home's partners (those passing PairTest) to its thread's buffer, branchless,
-// and records the home and its count for assemble_rows.
-template <class PairTest>
-class ContactOp {
- public:
-  static constexpr bool kTestsPairs = true;
-
-  ContactOp(const PairTest& test, detail::PartnerBuffer& out, std::vector<std::uint32_t>& homes,
-            std::uint32_t* found_count)
-      : test_(test), out_(out), homes_(homes), found_count_(found_count) {}
-
-  struct Sink {
-    std::uint32_t* next;
-    std::size_t found;
-    typename PairTest::ForHome test;
-    template <class Real>
-    void operator()(std::uint32_t j, Real dx, Real dy, Real dz) {
-      next[found] = j;
-      found += test(j, dx, dy, dz);
-    }
-    // Tests that take whole slot ranges (SimdContactTest) are called once per home.
-    void ranges(const SlotRange* r, int count) requires
-        requires(typename PairTest::ForHome t, const SlotRange* q, std::uint32_t* o) {
-      t.append(q, 0, o);
-    }
-    { found += test.append(r, count, next + found); }
-  };
-  Sink begin_home(const Home& home) {
-    // The slack: the SIMD test stores whole vectors past its last find.
-    return {out_.tail(home.tests + simd::kAppendSlack), 0, for_home(home)};
-  }
-  void end_home(const Home& home, const Sink& sink) {
-    out_.advance(sink.found);
-    found_count_[home.particle] = static_cast<std::uint32_t>(sink.found);
-    homes_.push_back(home.particle);
-    tests_ += home.tests;
-  }
-  std::uint64_t tests() const { return tests_; }
-
- private:
-  auto for_home(const Home& home) const {
-    if constexpr (requires { test_.for_home(home.particle, home.tests); }) {
-      return test_.for_home(home.particle, home.tests);
-    } else {
-      return test_.for_home(home.particle);
-    }
-  }
-
-  PairTest test_;
-  detail::PartnerBuffer& out_;
-  std::vector<std::uint32_t>& homes_;
-  std::uint32_t* found_count_;
-  std::uint64_t tests_ = 0;
-};
-
-// Adds each home's tests, the home itself and its range builds to its loop iteration, without
-// reading a candidate.
-struct WorkCountOp {
-  static constexpr bool kTestsPairs = false;
-  LoopWork& work;
-
-  struct Sink {};
-  Sink begin_home(const Home&) { return {}; }
-  void end_home(const Home& home, Sink) {
-    work.tests[home.iteration] += static_cast<std::uint32_t>(home.tests);
-    work.homes[home.iteration] += 1;
-    if (home.built) work.builds[home.iteration] = 1;
-  }
-};
+using pair_ops::ContactOp;
+using pair_ops::ContactTest;
+using pair_ops::NeighborTest;
+using pair_ops::SimdContactTest;
+using pair_ops::WorkCountOp;
 
 omp_sched_t to_omp(ScheduleKind kind) {
   switch (kind) {
@@ -448,19 +281,30 @@ void ContactDetector::with_layout(const Scene& scene, Precision precision, Detec
 DetectRun ContactDetector::run(const Scene& scene, const DetectOptions& options) {
   DetectRun run;
   const CellGrid grid = prepare(scene, options, 0.0, run);
-  const bool simd = working_is_sorted_ && simd_enabled();
+  // SIMD where a home's stencil holds enough candidates on average: 27 cells of the mean
+  // occupancy a particle sees, itself not counted (uniform at D = 1/200: about 3.5).
+  const std::uint64_t n = scene.size();
+  const double candidates_estimate =
+      n == 0 ? 0.0
+             : 27.0 * (static_cast<double>(registry_.occupancy_squares) / static_cast<double>(n) -
+                       1.0);
+  const bool forced = simd_forced();
+  const bool simd = working_is_sorted_ && simd_enabled() &&
+                    (forced || candidates_estimate >= static_cast<double>(pair_ops::kSimdFrom));
+  const std::uint64_t scalar_below = forced ? 0 : pair_ops::kSimdFrom;
   with_layout(scene, options.variant.precision, run, [&](const auto& layout) {
     using Real = typename std::remove_cvref_t<decltype(layout)>::Real;
     if (simd) {
       const Real diameter = static_cast<Real>(options.diameter);
       if (layout.d) {
         detect(grid, layout,
-               SimdContactTest<Real, true>{layout.x, layout.y, layout.z, layout.d, Real(0)},
+               SimdContactTest<Real, true>{layout.x, layout.y, layout.z, layout.d, Real(0),
+                                           scalar_below},
                options, run);
       } else {
         detect(grid, layout,
                SimdContactTest<Real, false>{layout.x, layout.y, layout.z, nullptr,
-                                            diameter * diameter},
+                                            diameter * diameter, scalar_below},
                options, run);
       }
     } else if (layout.d) {

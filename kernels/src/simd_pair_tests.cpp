@@ -113,6 +113,7 @@ namespace {
 std::int64_t current_target() { return HWY_DYNAMIC_DISPATCH(Target)(); }
 
 std::atomic<bool> scalar_only{false};
+std::atomic<bool> named{false};
 std::once_flag environment_read;
 
 // The targets of the CPU and the build, read before any selection narrows what Highway reports.
@@ -131,17 +132,20 @@ void select(std::string_view name) {
   const std::string wanted = upper(name);
   if (wanted == "OFF") {
     scalar_only = true;
+    named = false;
     return;
   }
   hwy::SetSupportedTargetsForTest(0);  // the CPU's own list again
   if (wanted == "BEST") {
     scalar_only = false;
+    named = false;
     return;
   }
   for (const std::int64_t target : available()) {
     if (upper(hwy::TargetName(target)) == wanted) {
       hwy::SetSupportedTargetsForTest(target);
       scalar_only = false;
+      named = true;
       return;
     }
   }
@@ -192,6 +196,11 @@ bool simd_enabled() {
   return !simd::scalar_only;
 }
 
+bool simd_forced() {
+  simd::read_environment();
+  return simd::named;
+}
+
 }  // namespace contactlab
 #endif  // HWY_ONCE
 
@@ -218,5 +227,6 @@ void select_simd_target(std::string_view name) {
   }
 }
 bool simd_enabled() { return false; }
+bool simd_forced() { return false; }
 }  // namespace contactlab
 #endif  // CONTACTLAB_NO_SIMD

@@ -90,6 +90,9 @@ struct CellRegistry {
   LargeVector<std::uint32_t> slot_particle;  // slot -> input index
   LargeVector<std::uint32_t> particle_slot;  // input index -> slot
   std::uint32_t max_occupancy = 0;
+  // Sum over cells of occupancy^2: divided by the particle count, the mean occupancy of a
+  // particle's own cell (itself included), what a particle's stencil holds per cell.
+  std::uint64_t occupancy_squares = 0;
 
   // Registers the particles. With `sorted`, also copies the coordinates (and diameters) into
   // slot order: the paper's reordering. particle_slot is filled only without it (the

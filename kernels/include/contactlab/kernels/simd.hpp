@@ -29,4 +29,9 @@ void select_simd_target(std::string_view name);
 // Whether the contact tests of the sorted layouts run on SIMD lanes (simd_target() != "off").
 bool simd_enabled();
 
+// Whether a target was named (select_simd_target or CONTACTLAB_SIMD other than "best"): then
+// every home of the sorted layouts runs on it. Otherwise the detector keeps sparse scenes and
+// homes with few candidates in the scalar loop, where a vector call costs more than the tests.
+bool simd_forced();
+
 }  // namespace contactlab
