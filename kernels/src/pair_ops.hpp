@@ -59,17 +59,13 @@ struct SimdContactTest {
     simd::RangeTask<Real> task;
     std::uint64_t candidates, scalar_below;
     std::size_t append(const SlotRange* ranges, int count, std::uint32_t* out) {
-      if (candidates < scalar_below) {  // the same test, so the same contacts, bit for bit
+      if (candidates < scalar_below) {  // ContactTest's decision: the same contacts, bit for bit
+        const typename ContactTest<Real, kDiameters>::ForHome test{task.di, task.d, task.reach_sq};
         std::size_t found = 0;
         for (int r = 0; r < count; ++r) {
           for (std::uint32_t j = ranges[r].begin; j < ranges[r].end; ++j) {
-            const Real dx = task.xi - task.x[j], dy = task.yi - task.y[j], dz = task.zi - task.z[j];
             out[found] = j;
-            if constexpr (kDiameters) {
-              found += in_contact(dx, dy, dz, task.di, task.d[j]);
-            } else {
-              found += in_contact(dx, dy, dz, task.reach_sq);
-            }
+            found += test(j, task.xi - task.x[j], task.yi - task.y[j], task.zi - task.z[j]);
           }
         }
         return found;
