@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdint>
 #include <cstring>
 #include <fstream>
 #include <iterator>
@@ -114,28 +115,48 @@ TEST(DemSink, CheckpointAfterRemovalsRestartsBitIdentically) {
 }
 
 // Checkpoints written before the sink existed (format 1: no sink counters) are still read.
-TEST(DemSink, FormatOneCheckpointsAreStillRead) {
+// A checkpoint of this build rewritten in an older format: format 2 carries six arrays of
+// synchronised velocities after wz (any values: they are dropped), format 1 lacks the sink's
+// counters besides.
+std::string older_checkpoint(std::string bytes, std::size_t n, char version) {
+  // Magic (8), three counts (24), frames (4), time, step, rebuilds, overlaps, energy (40), the
+  // sink's two counters (16); then each array is its length (8) and its elements: id (4 bytes
+  // each), material and contacts (2), x, y, z, v and w (8).
+  constexpr std::size_t kHeader = 92;
+  const std::size_t after_w = kHeader + (8 + 4 * n) + 2 * (8 + 2 * n) + 9 * (8 + 8 * n);
+  std::string array(8 + 8 * n, '\0');
+  const std::uint64_t length = n;
+  std::memcpy(array.data(), &length, 8);
+  for (int k = 0; k < 6; ++k) bytes.insert(after_w, array);
+  bytes[7] = version;
+  if (version == '1') bytes.erase(76, 16);
+  return bytes;
+}
+
+class DemSinkOlderCheckpoint : public ::testing::TestWithParam<char> {};
+
+TEST_P(DemSinkOlderCheckpoint, IsStillRead) {
   auto [settings, particles] = test::small_bed();
   Engine original(settings, particles);
   original.run_steps(300);
-  const std::string v2 = ::testing::TempDir() + "dem_sink_v2.chk";
-  const std::string v1 = ::testing::TempDir() + "dem_sink_v1.chk";
-  write_checkpoint(original, 1, v2);
-  std::ifstream in(v2, std::ios::binary);
+  const std::string now = ::testing::TempDir() + "dem_sink_now.chk";
+  const std::string old = ::testing::TempDir() + "dem_sink_old.chk";
+  write_checkpoint(original, 1, now);
+  std::ifstream in(now, std::ios::binary);
   std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  // Magic (8), three counts (24), frames (4), time, step, rebuilds, overlaps, energy (40):
-  // the sink's two counters follow at byte 76.
-  bytes[7] = '1';
-  bytes.erase(76, 16);
-  std::ofstream(v1, std::ios::binary) << bytes;
+  std::ofstream(old, std::ios::binary)
+      << older_checkpoint(bytes, original.particles().size(), GetParam());
   Engine restored(settings, particles);
-  EXPECT_EQ(read_checkpoint(restored, v1), 1);
+  EXPECT_EQ(read_checkpoint(restored, old), 1);
   EXPECT_EQ(restored.step_count(), original.step_count());
   EXPECT_EQ(restored.removed_count(), 0u);
   original.run_steps(200);
   restored.run_steps(200);
   EXPECT_TRUE(test::bitwise_equal(state_by_sparse_id(restored), state_by_sparse_id(original)));
 }
+
+INSTANTIATE_TEST_SUITE_P(Formats, DemSinkOlderCheckpoint, ::testing::Values('1', '2'),
+                         [](const auto& format) { return std::string("Format") + format.param; });
 
 TEST(DemSink, ARunWithoutParticlesGoesOn) {
   auto [settings, particles] = draining_bed();

@@ -15,7 +15,9 @@ namespace contactlab::dem {
 namespace {
 
 // Format 2 added the sink's counters; particles may be fewer than the config's (removed).
-constexpr char kMagic[8] = {'C', 'L', 'D', 'E', 'M', 'C', 'K', '2'};
+// Format 3 dropped the six arrays of synchronised velocities (the engine predicts them from
+// v and f at the next step; formats 1 and 2 still carry them, read and dropped).
+constexpr char kMagic[8] = {'C', 'L', 'D', 'E', 'M', 'C', 'K', '3'};
 
 template <class T>
 void put(std::ostream& out, const T& v) {
@@ -89,11 +91,12 @@ int read_checkpoint(Engine& engine, const std::string& path) {
   if (!file) throw InputError("cannot open checkpoint '" + path + "'");
   char magic[8];
   file.read(magic, sizeof magic);
-  // Format 1 (before the sink) is read too: it has no sink counters (zero).
-  const bool version1 = file && std::memcmp(magic, kMagic, 7) == 0 && magic[7] == '1';
-  if (!file || (!version1 && std::memcmp(magic, kMagic, sizeof magic) != 0)) {
+  // Formats 1 (before the sink: no sink counters) and 2 are read too.
+  const char version = file && std::memcmp(magic, kMagic, 7) == 0 ? magic[7] : '\0';
+  if (version < '1' || version > kMagic[7]) {
     throw InputError(path + ": not a contactlab DEM checkpoint");
   }
+  const bool version1 = version == '1';
   Reader in(file, path);
   const auto n = in.get<std::uint64_t>();
   const auto walls3 = in.get<std::uint64_t>();
@@ -117,7 +120,13 @@ int read_checkpoint(Engine& engine, const std::string& path) {
     s.removed_mass = in.get<double>();
   }
   Particles p = engine.particles();
-  p.for_each_array([&](auto& v) { in.array(v, n); });
+  p.for_each_array([&](auto& v) {
+    in.array(v, n);
+    if (version < '3' && static_cast<const void*>(&v) == &p.wz) {  // then pvx .. pwz, unused
+      std::vector<double> synchronised_velocity;
+      for (int k = 0; k < 6; ++k) in.array(synchronised_velocity, n);
+    }
+  });
   std::vector<std::uint8_t> seen(engine.id_capacity(), 0);
   for (std::uint32_t id : p.id) {
     if (id >= seen.size() || seen[id] != 0) {

@@ -71,26 +71,38 @@ Engine::Engine(EngineSettings settings, Particles particles)
       }
     }
   }
-  // The first forces see the initial velocities.
-  p.pvx = p.vx;
-  p.pvy = p.vy;
-  p.pvz = p.vz;
-  p.pwx = p.wx;
-  p.pwy = p.wy;
-  p.pwz = p.wz;
-  refresh_kinematics();
+  refresh_kinematics(0.0);  // the first forces see the initial velocities
   compute_forces(false);
   const Energies e = energies();
   initial_energy_ = e.kinetic + e.potential;
 }
 
-void Engine::refresh_kinematics() {
+double Engine::prediction_kick() const {
+  return settings_.velocity_in_forces == VelocityInForces::kSynchronised ? 0.5 * settings_.dt_s
+                                                                         : 0.0;
+}
+
+void Engine::refresh_kinematics(double kick) {
   const Particles& p = particles_;
   kin_.assign(kKinStride * p.size(), 0.0);
   for (std::size_t k = 0; k < p.size(); ++k) {
+    // The velocities the forces see, predicted as step() does (the same operations).
+    const double ax = p.fx[k] * p.inv_mass[k], ay = p.fy[k] * p.inv_mass[k],
+                 az = p.fz[k] * p.inv_mass[k];
+    const double bx = p.tx[k] * p.inv_inertia[k], by = p.ty[k] * p.inv_inertia[k],
+                 bz = p.tz[k] * p.inv_inertia[k];
     double* kin = &kin_[kKinStride * k];
-    const double v[11] = {p.x[k],   p.y[k],    p.z[k],   p.radius[k], p.pvx[k], p.pvy[k],
-                          p.pvz[k], p.mass[k], p.pwx[k], p.pwy[k],    p.pwz[k]};
+    const double v[11] = {p.x[k],
+                          p.y[k],
+                          p.z[k],
+                          p.radius[k],
+                          p.vx[k] + ax * kick,
+                          p.vy[k] + ay * kick,
+                          p.vz[k] + az * kick,
+                          p.mass[k],
+                          p.wx[k] + bx * kick,
+                          p.wy[k] + by * kick,
+                          p.wz[k] + bz * kick};
     std::copy(v, v + 11, kin);
   }
   index_wall_reach();
@@ -132,7 +144,7 @@ void Engine::rebuild() {
   }
   ++rebuilds_;
   index_ids();
-  refresh_kinematics();
+  refresh_kinematics(prediction_kick());
 }
 
 void Engine::fail(const std::string& what, std::uint32_t index) const {
@@ -147,7 +159,7 @@ void Engine::step() {
   Particles& p = particles_;
   const std::size_t n = p.size();
   const double dt = settings_.dt_s, half = 0.5 * dt;
-  const bool sync = settings_.velocity_in_forces == VelocityInForces::kSynchronised;
+  const double kick = prediction_kick();
   const double move_limit_sq = 0.25 * settings_.skin * settings_.skin;
   double t0 = omp_get_wtime();
   double max_disp_sq = 0.0;
@@ -171,24 +183,18 @@ void Engine::step() {
     p.x[k] += mx;
     p.y[k] += my;
     p.z[k] += mz;
-    // Synchronised: v(t + dt) ~ v(t + dt/2) + a(t) dt/2.
-    const double s = sync ? half : 0.0;
-    p.pvx[k] = p.vx[k] + ax * s;
-    p.pvy[k] = p.vy[k] + ay * s;
-    p.pvz[k] = p.vz[k] + az * s;
-    p.pwx[k] = p.wx[k] + bx * s;
-    p.pwy[k] = p.wy[k] + by * s;
-    p.pwz[k] = p.wz[k] + bz * s;
+    // Synchronised: v(t + dt) ~ v(t + dt/2) + a(t) dt/2, kept only where the forces read it
+    // (refresh_kinematics predicts it again the same way after a reorder).
     double* kin = &kin_[kKinStride * k];
     kin[0] = p.x[k];
     kin[1] = p.y[k];
     kin[2] = p.z[k];
-    kin[4] = p.pvx[k];
-    kin[5] = p.pvy[k];
-    kin[6] = p.pvz[k];
-    kin[8] = p.pwx[k];
-    kin[9] = p.pwy[k];
-    kin[10] = p.pwz[k];
+    kin[4] = p.vx[k] + ax * kick;
+    kin[5] = p.vy[k] + ay * kick;
+    kin[6] = p.vz[k] + az * kick;
+    kin[8] = p.wx[k] + bx * kick;
+    kin[9] = p.wy[k] + by * kick;
+    kin[10] = p.wz[k] + bz * kick;
     const double ddx = p.x[k] - p.x0[k], ddy = p.y[k] - p.y0[k], ddz = p.z[k] - p.z0[k];
     max_disp_sq = std::max(max_disp_sq, ddx * ddx + ddy * ddy + ddz * ddz);
     const double step_sq = mx * mx + my * my + mz * mz;
@@ -507,7 +513,8 @@ void Engine::restore(const State& state, Particles particles, PairList pairs) {
   pairs_.resize(pairs_.i.size(), coefficients_.mu_roll > 0);
   pairs_.build_csr(particles_.size());
   index_ids();
-  refresh_kinematics();
+  // (the next step predicts every velocity again before it computes forces)
+  refresh_kinematics(prediction_kick());
 }
 
 }  // namespace contactlab::dem

@@ -30,37 +30,48 @@ inline void combine_counts(std::uint64_t here, std::uint32_t bad_here, std::uint
   }
 }
 
-// Adds the block's pair outputs to the particles' sums in pair order: the i side to acc[i],
-// the j side to acc[j] when this thread owns j (j >= own_begin); otherwise the outputs are
-// kept in q.out / q.roll_* for j's owner, which adds them after the barrier (they come from
-// later rows, so pair order still holds). Particle a's sum is therefore its own row, then its
-// j sides in pair order, whatever the thread count.
-template <bool kRolling>
-inline void accumulate_block(const double* kin, PairList& q, std::size_t k0, std::size_t k1,
-                             PairBlock& blk, std::size_t own_begin, double* acc,
-                             std::uint64_t& large, std::uint32_t& bad) {
-  constexpr std::size_t kOut = PairList::kOutStride;
+// The rows [first, last) of a block: each row's outputs summed in pair order (i's force,
+// torque, touching contacts) and handed to store(i, sum), its overlaps counted, and each pair
+// handed to j_side(o, k, b) after its i side (o: the block's outputs, b: the pair's lane).
+template <bool kRolling, class JSide, class Store>
+inline void sum_rows(const PairList& q, std::size_t first, std::size_t last, PairBlock& blk,
+                     const double* kin, std::uint64_t& large, std::uint32_t& bad, JSide&& j_side,
+                     Store&& store) {
   const double* o[PairBlock::kOutputs];
   for (int f = 0; f < PairBlock::kOutputs; ++f) o[f] = blk.out(static_cast<PairBlock::Output>(f));
-  for (std::size_t k = k0; k < k1; ++k) {
-    large += o[PairBlock::kLarge][k - k0] != 0.0;
-    if (o[PairBlock::kFailing][k - k0] != 0.0) bad = std::min(bad, static_cast<std::uint32_t>(k));
-    const std::size_t b = k - k0;
-    const std::uint32_t i = q.i[k], j = q.j[k];
+  const std::size_t k0 = q.rows[first];
+  for (std::size_t i = first; i < last; ++i) {
     const double ri = kin[kKinStride * i + 3];
-    double* ai = acc + kAccStride * i;
-    ai[0] += o[PairBlock::kFx][b];
-    ai[1] += o[PairBlock::kFy][b];
-    ai[2] += o[PairBlock::kFz][b];
-    ai[3] -= ri * o[PairBlock::kCx][b];
-    ai[4] -= ri * o[PairBlock::kCy][b];
-    ai[5] -= ri * o[PairBlock::kCz][b];
-    ai[6] += o[PairBlock::kTouch][b];
-    if constexpr (kRolling) {
-      ai[3] += o[PairBlock::kRollX][b];
-      ai[4] += o[PairBlock::kRollY][b];
-      ai[5] += o[PairBlock::kRollZ][b];
+    double sum[7] = {0, 0, 0, 0, 0, 0, 0};
+    for (std::size_t k = q.rows[i]; k < q.rows[i + 1]; ++k) {
+      const std::size_t b = k - k0;
+      large += o[PairBlock::kLarge][b] != 0.0;
+      if (o[PairBlock::kFailing][b] != 0.0) bad = std::min(bad, static_cast<std::uint32_t>(k));
+      for (int d = 0; d < 3; ++d) {
+        sum[d] += o[PairBlock::kFx + d][b];
+        sum[3 + d] -= ri * o[PairBlock::kCx + d][b];
+        if constexpr (kRolling) sum[3 + d] += o[PairBlock::kRollX + d][b];
+      }
+      sum[6] += o[PairBlock::kTouch][b];
+      j_side(o, k, b);
     }
+    store(i, sum);
+  }
+}
+
+// The ordered pass's sums: each row summed in registers and stored to its particle (nothing
+// reached it before: its j sides come from later rows), then each j side subtracted from j's
+// sum when this thread owns j (j >= own_begin); otherwise the outputs are kept in q.out /
+// q.roll_* for j's owner, which adds them after the barrier (they come from later rows, so
+// pair order still holds). Particle a's sum is therefore its own row, then its j sides in
+// pair order, whatever the thread count.
+template <bool kRolling>
+inline void accumulate_ordered(const double* kin, PairList& q, std::size_t first, std::size_t last,
+                               PairBlock& blk, std::size_t own_begin, double* acc,
+                               std::uint64_t& large, std::uint32_t& bad) {
+  constexpr std::size_t kOut = PairList::kOutStride;
+  auto j_side = [&](const double* const* o, std::size_t k, std::size_t b) {
+    const std::uint32_t j = q.j[k];
     if (j < own_begin) {  // another thread's particle: left for its owner
       for (int f = 0; f <= PairBlock::kTouch; ++f) q.out[kOut * k + f] = o[f][b];
       if constexpr (kRolling) {
@@ -68,23 +79,20 @@ inline void accumulate_block(const double* kin, PairList& q, std::size_t k0, std
         q.roll_y[k] = o[PairBlock::kRollY][b];
         q.roll_z[k] = o[PairBlock::kRollZ][b];
       }
-      continue;
+      return;
     }
     const double rj = kin[kKinStride * j + 3];
     double* aj = acc + kAccStride * j;
-    aj[0] -= o[PairBlock::kFx][b];
-    aj[1] -= o[PairBlock::kFy][b];
-    aj[2] -= o[PairBlock::kFz][b];
-    aj[3] -= rj * o[PairBlock::kCx][b];
-    aj[4] -= rj * o[PairBlock::kCy][b];
-    aj[5] -= rj * o[PairBlock::kCz][b];
-    aj[6] += o[PairBlock::kTouch][b];
-    if constexpr (kRolling) {
-      aj[3] -= o[PairBlock::kRollX][b];
-      aj[4] -= o[PairBlock::kRollY][b];
-      aj[5] -= o[PairBlock::kRollZ][b];
+    for (int d = 0; d < 3; ++d) {
+      aj[d] -= o[PairBlock::kFx + d][b];
+      aj[3 + d] -= rj * o[PairBlock::kCx + d][b];
+      if constexpr (kRolling) aj[3 + d] -= o[PairBlock::kRollX + d][b];
     }
-  }
+    aj[6] += o[PairBlock::kTouch][b];
+  };
+  sum_rows<kRolling>(
+      q, first, last, blk, kin, large, bad, j_side,
+      [&](std::size_t i, const double(&sum)[7]) { std::copy(sum, sum + 7, acc + kAccStride * i); });
 }
 
 // Adds to particle a's sum the j sides that later threads left in q.out (pairs from rows at
@@ -115,7 +123,7 @@ inline void accumulate_deferred(const double* kin, const PairList& q, std::size_
 }
 
 // The force pass: each thread takes a contiguous range of rows [b, e), computes them a block
-// at a time (pack_rows, pair_law on SIMD lanes, accumulate_block) and
+// at a time (pack_rows, pair_law on SIMD lanes, accumulate_ordered) and
 // finishes particle a (finish(a, with_walls, large, bad_wall): walls unless serial_walls, when
 // walls(a, ...) adds them for every particle in one thread first; gravity, kick) as soon
 // as the rows holding its j sides, (a, a + lag], are done; lag = max_span finishes particles
@@ -141,10 +149,9 @@ void force_pass(const double* kin, std::size_t n, PairList& q, const PairCoeffic
     const std::size_t last = std::min(e, first + kRowsPerBlock);
     const std::size_t k0 = q.rows[first], k1 = q.rows[last];
     blk.reserve(k1 - k0);
-    std::fill(acc + kAccStride * first, acc + kAccStride * last, 0.0);
     pack_rows<kRolling>(kin, q, first, last, blk, acc);
     pair_law<kRolling, kClamp>(c, dt, k1 - k0, blk, SpringView::in_place(q, k0));
-    accumulate_block<kRolling>(kin, q, k0, k1, blk, b, acc, large_here, bad_here);
+    accumulate_ordered<kRolling>(kin, q, first, last, blk, b, acc, large_here, bad_here);
     for (; next + lag < last; ++next) finish(next, true, large_here, bad_wall_here);
   }
 #pragma omp barrier
@@ -198,35 +205,6 @@ inline void add_to(double& sum, double value) {
     sum += value;
   } else {
     sum += value;
-  }
-}
-
-// The rows [first, last) of a block: each row's outputs summed in pair order (i's force,
-// torque, touching contacts) and handed to store(i, sum), its overlaps counted, and each pair
-// handed to j_side(o, k, b) after its i side (o: the block's outputs, b: the pair's lane).
-template <bool kRolling, class JSide, class Store>
-inline void sum_rows(const PairList& q, std::size_t first, std::size_t last, PairBlock& blk,
-                     const double* kin, std::uint64_t& large, std::uint32_t& bad, JSide&& j_side,
-                     Store&& store) {
-  const double* o[PairBlock::kOutputs];
-  for (int f = 0; f < PairBlock::kOutputs; ++f) o[f] = blk.out(static_cast<PairBlock::Output>(f));
-  const std::size_t k0 = q.rows[first];
-  for (std::size_t i = first; i < last; ++i) {
-    const double ri = kin[kKinStride * i + 3];
-    double sum[7] = {0, 0, 0, 0, 0, 0, 0};
-    for (std::size_t k = q.rows[i]; k < q.rows[i + 1]; ++k) {
-      const std::size_t b = k - k0;
-      large += o[PairBlock::kLarge][b] != 0.0;
-      if (o[PairBlock::kFailing][b] != 0.0) bad = std::min(bad, static_cast<std::uint32_t>(k));
-      for (int d = 0; d < 3; ++d) {
-        sum[d] += o[PairBlock::kFx + d][b];
-        sum[3 + d] -= ri * o[PairBlock::kCx + d][b];
-        if constexpr (kRolling) sum[3 + d] += o[PairBlock::kRollX + d][b];
-      }
-      sum[6] += o[PairBlock::kTouch][b];
-      j_side(o, k, b);
-    }
-    store(i, sum);
   }
 }
 

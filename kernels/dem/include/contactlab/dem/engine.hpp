@@ -148,8 +148,11 @@ class Engine {
   // list, renumbered), and indexes the stable ids of the particles left.
   void remove_sunk_particles();
   void index_ids();
-  void refresh_kinematics();  // kin_ from the particle arrays (after a reorder or restore)
-  void index_wall_reach();    // wall_reach_ for the particles as they stand
+  // kin_ from the particle arrays (after a reorder or restore), with the velocities the forces
+  // see predicted as v + a kick.
+  void refresh_kinematics(double kick);
+  double prediction_kick() const;  // dt/2 with synchronised velocities, else 0
+  void index_wall_reach();         // wall_reach_ for the particles as they stand
   void compute_forces(bool final_kick);
   void check_pair_overlap(std::size_t k) const;
   [[noreturn]] void fail(const std::string& what, std::uint32_t index) const;

@@ -10,11 +10,9 @@ namespace contactlab::dem {
 struct Particles {
   std::vector<std::uint32_t> id;  // stable id: the input order, used for output and history
   std::vector<std::uint16_t> material;
-  std::vector<double> x, y, z;     // m
-  std::vector<double> vx, vy, vz;  // m/s (between the two half kicks: v(t + dt/2))
-  std::vector<double> wx, wy, wz;  // angular velocity, rad/s
-  // Synchronised velocities v(t + dt) predicted for the force evaluation.
-  std::vector<double> pvx, pvy, pvz, pwx, pwy, pwz;
+  std::vector<double> x, y, z;          // m
+  std::vector<double> vx, vy, vz;       // m/s (between the two half kicks: v(t + dt/2))
+  std::vector<double> wx, wy, wz;       // angular velocity, rad/s
   std::vector<double> fx, fy, fz;       // total force of the last evaluation, N
   std::vector<double> tx, ty, tz;       // total torque, N m
   std::vector<double> radius;           // m
@@ -63,12 +61,6 @@ struct Particles {
                     &p.wx,
                     &p.wy,
                     &p.wz,
-                    &p.pvx,
-                    &p.pvy,
-                    &p.pvz,
-                    &p.pwx,
-                    &p.pwy,
-                    &p.pwz,
                     &p.fx,
                     &p.fy,
                     &p.fz,
