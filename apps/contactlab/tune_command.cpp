@@ -26,6 +26,7 @@ struct TuneCommand {
   bool exhaustive_ = false;
   bool recalibrate_ = false;
   std::uint64_t tolerance_ = 0;
+  bool float_ = false;
   int max_chunk_ = 65536;
   std::string orders_ = "sorted,morton";
   int search_samples_ = tn::TuneOptions{}.search_samples;
@@ -50,7 +51,8 @@ void TuneCommand::add_to(CLI::App& sub) {
   sub.add_flag("--predict-only", predict_only_, "the model alone: no timed run on the scene");
   sub.add_flag("--exhaustive", exhaustive_, "also sweep every chunk (ground truth)");
   sub.add_flag("--recalibrate", recalibrate_, "fit the machine's cost model again");
-  sub.add_option("--tolerance", tolerance_, "wrong contact pairs allowed (single precision)");
+  sub.add_flag("--float", float_, "screen the single-precision variants too (exact: near-ties in double)");
+  sub.add_option("--tolerance", tolerance_, "wrong contact pairs allowed (implies --float)");
   sub.add_option("--max-chunk", max_chunk_, "largest chunk of the grid 1, 2, 4, ...");
   sub.add_option("--orders", orders_, "orders to screen, comma-separated");
   sub.add_option("--search-samples", search_samples_, "timed runs per chunk the search evaluates")
@@ -87,7 +89,7 @@ tn::TuneOptions TuneCommand::options() const {
   options.search_samples = search_samples_;
   options.exhaustive_rounds = exhaustive_rounds_;
   options.verify_rounds = verify_rounds_;
-  if (tolerance_ > 0) options.precisions.push_back(Precision::kFloat);
+  if (float_ || tolerance_ > 0) options.precisions.push_back(Precision::kFloat);
   options.chunk_grid = tn::log2_chunk_grid(max_chunk_);
   options.orders.clear();
   for (const auto& order : split_list(orders_)) options.orders.push_back(parse_order(order));

@@ -241,13 +241,18 @@ void ContactDetector::with_layout(const Scene& scene, Precision precision, Detec
           ? Source{sorted_.x.data(), sorted_.y.data(), sorted_.z.data(), sorted_.diameter.data()}
           : Source{scene.x.data(), scene.y.data(), scene.z.data(), scene.diameter.data()};
   const bool diameters = scene.has_diameters();
+  // The double coordinates, for the float test's second test within its rounding band.
+  const ExactCoordinates exact{source.x, source.y, source.z, diameters ? source.diameter : nullptr,
+                               0.0};
+  double extent = 0.0;  // of the float coordinates: the band grows with it
   auto run_with = [&](const auto& coordinates) {
     using Real = std::remove_cvref_t<decltype(*coordinates.x)>;
     if (working_is_sorted_) {
-      f(traversal::SortedLayout<Real>{coordinates, registry_.slot_particle.data()});
+      f(traversal::SortedLayout<Real>{coordinates, registry_.slot_particle.data()}, exact, extent);
     } else {
       f(traversal::UnsortedLayout<Real>{coordinates, registry_.slot_particle.data(),
-                                        registry_.particle_slot.data()});
+                                        registry_.particle_slot.data()},
+        exact, extent);
     }
   };
   if (precision == Precision::kDouble) {
@@ -265,12 +270,15 @@ void ContactDetector::with_layout(const Scene& scene, Precision precision, Detec
   narrow_y_.resize(n);
   narrow_z_.resize(n);
   narrow_d_.resize(diameters ? n : 0);
-#pragma omp parallel for schedule(static) num_threads(run.threads)
+#pragma omp parallel for schedule(static) num_threads(run.threads) reduction(max : extent)
   for (std::size_t i = 0; i < n; ++i) {
     narrow_x_[i] = static_cast<float>(source.x[i] - lo[0]);
     narrow_y_[i] = static_cast<float>(source.y[i] - lo[1]);
     narrow_z_[i] = static_cast<float>(source.z[i] - lo[2]);
     if (diameters) narrow_d_[i] = static_cast<float>(source.diameter[i]);
+    extent = std::max({extent, std::abs(static_cast<double>(narrow_x_[i])),
+                       std::abs(static_cast<double>(narrow_y_[i])),
+                       std::abs(static_cast<double>(narrow_z_[i]))});
   }
   run.setup_s += omp_get_wtime() - convert_start;
   run_with(traversal::Coordinates<float>{source.x, source.y, source.z, narrow_x_.data(),
@@ -292,28 +300,37 @@ DetectRun ContactDetector::run(const Scene& scene, const DetectOptions& options)
   const bool simd = working_is_sorted_ && simd_enabled() &&
                     (forced || candidates_estimate >= static_cast<double>(pair_ops::kSimdFrom));
   const std::uint64_t scalar_below = forced ? 0 : pair_ops::kSimdFrom;
-  with_layout(scene, options.variant.precision, run, [&](const auto& layout) {
-    using Real = typename std::remove_cvref_t<decltype(layout)>::Real;
-    if (simd) {
-      const Real diameter = static_cast<Real>(options.diameter);
-      if (layout.d) {
-        detect(grid, layout,
-               SimdContactTest<Real, true>{layout.x, layout.y, layout.z, layout.d, Real(0),
-                                           scalar_below},
-               options, run);
-      } else {
-        detect(grid, layout,
-               SimdContactTest<Real, false>{layout.x, layout.y, layout.z, nullptr,
-                                            diameter * diameter, scalar_below},
-               options, run);
-      }
-    } else if (layout.d) {
-      detect(grid, layout, ContactTest<Real, true>{layout.d, Real(0)}, options, run);
-    } else {
-      const Real diameter = static_cast<Real>(options.diameter);
-      detect(grid, layout, ContactTest<Real, false>{nullptr, diameter * diameter}, options, run);
-    }
-  });
+  with_layout(
+      scene, options.variant.precision, run,
+      [&](const auto& layout, ExactCoordinates exact, double extent) {
+        using Real = typename std::remove_cvref_t<decltype(layout)>::Real;
+        const Real diameter = static_cast<Real>(options.diameter);
+        // Float: the rounding band for any candidate of the stencil (offsets under two cells).
+        exact.reach_sq = options.diameter * options.diameter;
+        const auto& width = grid.cell_width();
+        const FloatBand band =
+            FloatBand::make(extent, 2.0 * std::max({width[0], width[1], width[2]}),
+                            layout.d ? scene.max_diameter() : options.diameter, exact.reach_sq);
+        if (simd) {
+          if (layout.d) {
+            detect(grid, layout,
+                   SimdContactTest<Real, true>{layout.x, layout.y, layout.z, layout.d, Real(0),
+                                               exact, band, scalar_below},
+                   options, run);
+          } else {
+            detect(grid, layout,
+                   SimdContactTest<Real, false>{layout.x, layout.y, layout.z, nullptr,
+                                                diameter * diameter, exact, band, scalar_below},
+                   options, run);
+          }
+        } else if (layout.d) {
+          detect(grid, layout, ContactTest<Real, true>{layout.d, Real(0), exact, band}, options,
+                 run);
+        } else {
+          detect(grid, layout, ContactTest<Real, false>{nullptr, diameter * diameter, exact, band},
+                 options, run);
+        }
+      });
   return run;
 }
 
@@ -326,7 +343,7 @@ ContactList ContactDetector::neighbor_list(const Scene& scene, const DetectOptio
   full.variant.stencil = Stencil::kFull;
   DetectRun run;
   const CellGrid grid = prepare(scene, full, skin, run);
-  with_layout(scene, full.variant.precision, run, [&](const auto& layout) {
+  with_layout(scene, full.variant.precision, run, [&](const auto& layout, auto&&...) {
     using Layout = std::remove_cvref_t<decltype(layout)>;
     using Real = typename Layout::Real;
     if (layout.d) {
@@ -362,7 +379,7 @@ LoopWork ContactDetector::iteration_work(const Scene& scene, const DetectOptions
   work.builds.assign(iterations, 0);
   WorkCountOp op{work};
   // Only the cells are read: double coordinates in the working order, whatever the precision.
-  with_layout(scene, Precision::kDouble, run, [&](const auto& layout) {
+  with_layout(scene, Precision::kDouble, run, [&](const auto& layout, auto&&...) {
     traversal::traverse(
         {grid, registry_, variant.loop, variant.stencil, options.homes, options.blocks}, layout,
         op);

@@ -5,6 +5,7 @@
 #pragma once
 
 #include <cstdint>
+#include <type_traits>
 #include <vector>
 
 #include "contactlab/kernels/detector.hpp"
@@ -17,25 +18,39 @@ namespace contactlab::pair_ops {
 
 using traversal::Home;
 
-// The contact test of pair_test.hpp, for one home at a time.
+// The contact test of pair_test.hpp, for one home at a time. In float, the pairs within the
+// rounding band are tested again in double: the same contacts as the double test.
 template <class Real, bool kDiameters>
 struct ContactTest {
   const Real* d;
-  Real reach_sq;  // D^2, without per-particle diameters
+  Real reach_sq;             // D^2, without per-particle diameters
+  ExactCoordinates exact{};  // float only
+  FloatBand band{};          // float only
 
   struct ForHome {
     Real di;
     const Real* d;
     Real reach_sq;
+    const ContactTest* test;
+    std::uint32_t h;
     bool operator()(std::uint32_t j, Real dx, Real dy, Real dz) const {
-      if constexpr (kDiameters) {
+      if constexpr (std::is_same_v<Real, float>) {
+        bool unsure = false;
+        bool hit = float_contact<kDiameters>(dx * dx + dy * dy + dz * dz,
+                                             kDiameters ? di + d[j] : 0.0f, test->band, unsure);
+        if (unsure) [[unlikely]]
+          hit = test->exact.in_contact(h, j, kDiameters);
+        return hit;
+      } else if constexpr (kDiameters) {
         return in_contact(dx, dy, dz, di, d[j]);
       } else {
         return in_contact(dx, dy, dz, reach_sq);
       }
     }
   };
-  ForHome for_home(std::uint32_t h) const { return {kDiameters ? d[h] : Real(0), d, reach_sq}; }
+  ForHome for_home(std::uint32_t h) const {
+    return {kDiameters ? d[h] : Real(0), d, reach_sq, this, h};
+  }
 };
 
 // Below this many candidates a home (or, estimated from the cell occupancy, the average home
@@ -49,7 +64,9 @@ inline constexpr std::uint64_t kSimdFrom = 16;
 template <class Real, bool kDiameters>
 struct SimdContactTest {
   const Real *x, *y, *z, *d;
-  Real reach_sq;  // D^2, without per-particle diameters
+  Real reach_sq;           // D^2, without per-particle diameters
+  ExactCoordinates exact;  // float only
+  FloatBand band;          // float only
 
   // Homes with fewer candidates than this are tested in the scalar loop (see kSimdFrom), unless
   // a target was named (simd_forced(): tests, benchmarks of a target).
@@ -60,7 +77,8 @@ struct SimdContactTest {
     std::uint64_t candidates, scalar_below;
     std::size_t append(const SlotRange* ranges, int count, std::uint32_t* out) {
       if (candidates < scalar_below) {  // ContactTest's decision: the same contacts, bit for bit
-        const typename ContactTest<Real, kDiameters>::ForHome test{task.di, task.d, task.reach_sq};
+        const ContactTest<Real, kDiameters> scalar{task.d, task.reach_sq, *task.exact, task.band};
+        const auto test = scalar.for_home(task.home);
         std::size_t found = 0;
         for (int r = 0; r < count; ++r) {
           for (std::uint32_t j = ranges[r].begin; j < ranges[r].end; ++j) {
@@ -76,7 +94,8 @@ struct SimdContactTest {
     }
   };
   ForHome for_home(std::uint32_t h, std::uint64_t candidates) const {
-    return {{x, y, z, d, x[h], y[h], z[h], kDiameters ? d[h] : Real(0), reach_sq, nullptr, 0},
+    return {{x, y, z, d, x[h], y[h], z[h], kDiameters ? d[h] : Real(0), reach_sq, nullptr, 0, h,
+             &exact, band},
             candidates,
             scalar_below};
   }

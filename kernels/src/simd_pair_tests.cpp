@@ -19,6 +19,9 @@
 #include <hwy/foreach_target.h>  // IWYU pragma: keep
 #include <hwy/highway.h>
 
+#include <algorithm>
+#include <type_traits>
+
 HWY_BEFORE_NAMESPACE();
 namespace contactlab::simd {
 namespace HWY_NAMESPACE {
@@ -32,6 +35,10 @@ std::size_t Append(const RangeTask<Real>& task, std::uint32_t* HWY_RESTRICT out)
   const auto xi = hn::Set(d, task.xi), yi = hn::Set(d, task.yi), zi = hn::Set(d, task.zi);
   const auto reach_sq = hn::Set(d, task.reach_sq), di = hn::Set(d, task.di);
   const auto four = hn::Set(d, Real(4));
+  [[maybe_unused]] const auto sure_sq = hn::Set(d, static_cast<Real>(task.band.sure));
+  [[maybe_unused]] const auto unsure_sq = hn::Set(d, static_cast<Real>(task.band.unsure));
+  [[maybe_unused]] const auto margin = hn::Set(d, static_cast<Real>(task.band.margin));
+  [[maybe_unused]] const auto minus_margin = hn::Set(d, static_cast<Real>(-task.band.margin));
   std::size_t found = 0;
   for (int r = 0; r < task.count; ++r) {
     const std::uint32_t end = task.ranges[r].end;
@@ -42,7 +49,35 @@ std::size_t Append(const RangeTask<Real>& task, std::uint32_t* HWY_RESTRICT out)
       const auto dz = hn::Sub(zi, hn::MaskedLoad(valid, d, task.z + s));
       const auto dist_sq = hn::Add(hn::Add(hn::Mul(dx, dx), hn::Mul(dy, dy)), hn::Mul(dz, dz));
       auto hit = hn::Le(dist_sq, reach_sq);
-      if constexpr (kDiameters) {
+      if constexpr (std::is_same_v<Real, float>) {  // the band of pair_test.hpp's float_contact
+        auto maybe = hn::Le(dist_sq, unsure_sq);
+        hit = hn::Le(dist_sq, sure_sq);
+        if constexpr (kDiameters) {
+          const auto sum = hn::Add(di, hn::MaskedLoad(valid, d, task.d + s));
+          const auto t = hn::Sub(hn::Mul(sum, sum), hn::Mul(four, dist_sq));
+          hit = hn::Ge(t, margin);
+          maybe = hn::Ge(t, minus_margin);
+        }
+        hit = hn::And(hit, valid);
+        const auto unsure = hn::AndNot(hit, hn::And(maybe, valid));
+        if (!hn::AllFalse(d, unsure)) [[unlikely]] {  // lane by lane, the unsure ones in double
+          std::uint8_t hit_bits[HWY_MAX_BYTES / 4 + 8] = {},
+                                                    unsure_bits[HWY_MAX_BYTES / 4 + 8] = {};
+          hn::StoreMaskBits(d, hit, hit_bits);
+          hn::StoreMaskBits(d, unsure, unsure_bits);
+          const std::uint32_t count =
+              std::min<std::uint32_t>(static_cast<std::uint32_t>(lanes), end - s);
+          for (std::uint32_t l = 0; l < count; ++l) {
+            bool lane_hit = (hit_bits[l / 8] >> (l % 8)) & 1;
+            if ((unsure_bits[l / 8] >> (l % 8)) & 1) {
+              lane_hit = task.exact->in_contact(task.home, s + l, kDiameters);
+            }
+            out[found] = s + l;
+            found += lane_hit;
+          }
+          continue;
+        }
+      } else if constexpr (kDiameters) {
         const auto sum = hn::Add(di, hn::MaskedLoad(valid, d, task.d + s));
         hit = hn::Le(hn::Mul(four, dist_sq), hn::Mul(sum, sum));
       }

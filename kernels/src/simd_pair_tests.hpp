@@ -5,12 +5,15 @@
 #include <cstddef>
 #include <cstdint>
 
+#include "contactlab/kernels/pair_test.hpp"
 #include "contactlab/kernels/slot_range.hpp"
 
 namespace contactlab::simd {
 
 // One home against the candidate slots of `ranges` (slots = working ids: sorted layouts).
-// Coordinates in slot order; d is read only with per-particle diameters.
+// Coordinates in slot order; d is read only with per-particle diameters. In float, the
+// candidates within `band` of touching are decided by the double test on `exact`
+// (pair_test.hpp's FloatBand): the double test's contacts.
 template <class Real>
 struct RangeTask {
   const Real *x, *y, *z, *d;
@@ -19,6 +22,9 @@ struct RangeTask {
   Real reach_sq;  // D^2 (without them)
   const SlotRange* ranges;
   int count;
+  std::uint32_t home;
+  const ExactCoordinates* exact;  // float only
+  FloatBand band;                 // float only
 };
 
 // Slack past the candidates that a call may write (whole vectors): room the caller leaves.

@@ -1,9 +1,7 @@
 // Every variant (loop x order x stencil x schedule x precision from all_variants({1, 7, 64})) on
 // every scene kind with 1, 2 and 3 threads must reproduce the O(N^2) brute force exactly, and
-// report the same pair and candidate counts. Double variants are compared with
-// brute_force_contacts; float variants with the same brute force evaluated in float
-// (float_brute_force), and their differences from the double result must all be pairs within
-// float rounding of touching.
+// report the same pair and candidate counts: brute_force_contacts, float variants included
+// (they decide the pairs within float rounding of touching in double).
 //
 // One test per (scene kind, loop, order, stencil, precision); each runs the 10 schedules x 3
 // thread counts.
@@ -67,8 +65,7 @@ KindSetup setup_for(SceneKind kind) {
 struct Reference {
   Scene scene;
   double diameter = 0.0;
-  ContactList contacts;        // double
-  ContactList float_contacts;  // float
+  ContactList contacts;  // the double test's: float variants find them too
   std::uint64_t full_candidates = 0;
 };
 
@@ -81,7 +78,6 @@ const Reference& reference_for(SceneKind kind) {
     ref.scene = generate_scene(setup.spec);
     ref.diameter = setup.diameter;
     ref.contacts = brute_force_contacts(ref.scene, ref.diameter);
-    ref.float_contacts = float_brute_force(ref.scene, ref.diameter);
     ref.full_candidates = expected_full_candidates(ref.scene, ref.diameter);
     it = cache.emplace(kind, std::move(ref)).first;
   }
@@ -93,9 +89,6 @@ TEST(BruteForceReference, ScenesAreInterestingEnough) {
     SCOPED_TRACE(std::string(to_string(kind)));
     const Reference& ref = reference_for(kind);
     EXPECT_TRUE(well_formed(ref.contacts));
-    EXPECT_TRUE(well_formed(ref.float_contacts));
-    EXPECT_TRUE(float_errors_near_contact_distance(ref.scene, ref.diameter, ref.float_contacts,
-                                                   ref.contacts));
     EXPECT_GE(ref.scene.size(), 1500u);
     EXPECT_LE(ref.scene.size(), 3000u);
     // Plenty of contacts, and cells holding several particles.
@@ -113,7 +106,7 @@ class EveryVariantMatchesBruteForce : public ::testing::TestWithParam<Params> {}
 TEST_P(EveryVariantMatchesBruteForce, AllSchedulesAndThreadCounts) {
   const auto [kind, loop, order, stencil, precision] = GetParam();
   const Reference& ref = reference_for(kind);
-  const ContactList& expected = precision == Precision::kDouble ? ref.contacts : ref.float_contacts;
+  const ContactList& expected = ref.contacts;
   const std::uint64_t expected_candidates =
       stencil == Stencil::kFull ? ref.full_candidates : ref.full_candidates / 2;
   const CellGrid grid(ref.scene.box,
@@ -140,10 +133,6 @@ TEST_P(EveryVariantMatchesBruteForce, AllSchedulesAndThreadCounts) {
     }
   }
   EXPECT_EQ(runs, 30);  // 10 schedules x 3 thread counts
-  if (precision == Precision::kFloat) {
-    EXPECT_TRUE(
-        float_errors_near_contact_distance(ref.scene, ref.diameter, expected, ref.contacts));
-  }
 }
 
 std::string param_name(const ::testing::TestParamInfo<Params>& info) {
@@ -181,8 +170,7 @@ TEST_P(SortedVariantsMatchBruteForce, OnThisSimdTarget) {
       const bool picked = (schedule.kind == ScheduleKind::kStatic && schedule.chunk == 0) ||
                           (schedule.kind == ScheduleKind::kDynamic && schedule.chunk == 7);
       if (variant.order == Order::kUnsorted || !picked) continue;
-      const ContactList& expected =
-          variant.precision == Precision::kDouble ? ref.contacts : ref.float_contacts;
+      const ContactList& expected = ref.contacts;
       for (const int threads : {1, 3}) {
         SCOPED_TRACE(std::string(to_string(kind)) + " " + to_string(variant) +
                      " threads=" + std::to_string(threads));

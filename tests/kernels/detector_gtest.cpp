@@ -276,9 +276,7 @@ TEST(Detector, ReusedDetectorGivesFreshResults) {
     options.diameter = step.d;
     options.threads = step.threads;
     const DetectRun run = detector.run(step.scene, options);
-    const ContactList expected = step.variant.precision == Precision::kDouble
-                                     ? brute_force_contacts(step.scene, step.d)
-                                     : float_brute_force(step.scene, step.d);
+    const ContactList expected = brute_force_contacts(step.scene, step.d);
     EXPECT_TRUE(same_contacts(detector.canonical_contacts(), expected));
     EXPECT_EQ(run.contact_pairs, expected.pair_count());
   }

@@ -20,26 +20,16 @@ const std::vector<Variant>& all() {
   return variants;
 }
 
-// Runs `variant` and returns a description of the first disagreement with the brute force (in
-// the variant's precision; a float variant's differences from the double brute force must also
-// be near-ties), or an empty string. `float_is_exact`: the scene is exactly representable in
-// float and its distances exact, so float variants must match the double brute force too.
-std::string disagreement(const Scene& scene, double d, const Variant& variant, int threads,
-                         bool float_is_exact = false) {
-  const ContactList exact = brute_force_contacts(scene, d);
-  const ContactList expected = variant.precision == Precision::kDouble || float_is_exact
-                                   ? exact
-                                   : float_brute_force(scene, d);
+// Runs `variant` and returns a description of the first disagreement with the brute force
+// (float variants too: they decide near-ties in double), or an empty string.
+std::string disagreement(const Scene& scene, double d, const Variant& variant, int threads) {
+  const ContactList expected = brute_force_contacts(scene, d);
   const Detected got = detect(scene, variant, d, threads);
   std::ostringstream out;
   const auto same = same_contacts(got.contacts, expected);
   if (!same) out << same.message();
   if (got.run.contact_pairs != expected.pair_count())
     out << " contact_pairs " << got.run.contact_pairs;
-  if (variant.precision == Precision::kFloat) {
-    const auto near = float_errors_near_contact_distance(scene, d, got.contacts, exact);
-    if (!near) out << near.message();
-  }
   const std::uint64_t full = expected_full_candidates(scene, d);
   const std::uint64_t want = variant.stencil == Stencil::kFull ? full : full / 2;
   if (got.run.candidate_tests != want)
@@ -88,8 +78,7 @@ TEST(RapidCheck, TiesOnADyadicGridMatchBruteForce) {
     const double d = *rc::gen::inRange(1, 9) / 16.0;
     const Variant variant = *rc::gen::elementOf(all());
     const int threads = *rc::gen::inRange(1, 4);
-    // Everything here is exact in float as well: float variants must find the same ties.
-    const std::string problem = disagreement(scene, d, variant, threads, true);
+    const std::string problem = disagreement(scene, d, variant, threads);
     RC_ASSERT(problem == std::string());
   });
 }
@@ -105,10 +94,9 @@ TEST(RapidCheck, EveryVariantAgreesOnRandomPoints) {
     const Scene scene = make_scene(points);
     const double d = *rc::gen::inRange(1, 40) / 100.0;
     const ContactList expected = brute_force_contacts(scene, d);
-    const ContactList float_expected = float_brute_force(scene, d);
     for (const Variant& v : all()) {
       const Detected got = detect(scene, v, d, 2);
-      RC_ASSERT(got.contacts == (v.precision == Precision::kDouble ? expected : float_expected));
+      RC_ASSERT(got.contacts == expected);
     }
   });
 }

@@ -61,9 +61,9 @@ inline std::vector<Variant> only(std::vector<Variant> variants, Precision precis
   return variants;
 }
 
-// The single-precision reference: the brute force of brute_force.hpp with the same pair test
-// (pair_test.hpp) evaluated in float on coordinates relative to the box's lower corner,
-// diameters and D rounded to float, which is what variant.hpp says the float variants compute.
+// The brute force of brute_force.hpp with the pair test (pair_test.hpp) evaluated in float only,
+// on coordinates relative to the box's lower corner: what the float variants would find without
+// their second test in double (hard cases use it to show that they exercise that test).
 inline ContactList float_brute_force(const Scene& scene, double diameter) {
   const std::size_t n = scene.size();
   std::vector<float> x(n), y(n), z(n), d(scene.diameter.size());
@@ -88,57 +88,6 @@ inline ContactList float_brute_force(const Scene& scene, double diameter) {
     list.offsets[i + 1] = list.partners.size();
   }
   return list;
-}
-
-// How far from the contact distance a pair may be and still be judged differently in float:
-// rounding a coordinate of magnitude <= M to float moves it by <= 2^-24 M, so a distance moves
-// by <= sqrt(3) 2^-23 M, plus a few float roundings of the distance itself (D, squares, sum).
-inline double float_tolerance(const Scene& scene, double reach) {
-  double m = 0.0;
-  for (int axis = 0; axis < 3; ++axis) {
-    m = std::max({m, std::abs(scene.box.lo[axis]), std::abs(scene.box.hi[axis])});
-  }
-  return 2.0 * (std::sqrt(3.0) * 0x1.0p-23 * m + 0x1.0p-20 * reach);
-}
-
-// Every pair on which `got` (a float variant's canonical contacts) and `exact` (the double
-// reference) disagree is within float_tolerance of touching.
-inline ::testing::AssertionResult float_errors_near_contact_distance(const Scene& scene,
-                                                                     double diameter,
-                                                                     const ContactList& got,
-                                                                     const ContactList& exact) {
-  if (got.particle_count() != exact.particle_count()) {
-    return ::testing::AssertionFailure() << "particle count differs";
-  }
-  int bad = 0;
-  auto failure = ::testing::AssertionFailure();
-  for (std::size_t i = 0; i < exact.particle_count(); ++i) {
-    const auto a = got.partners_of(i);
-    const auto b = exact.partners_of(i);
-    std::vector<std::uint32_t> differ;
-    std::set_symmetric_difference(a.begin(), a.end(), b.begin(), b.end(),
-                                  std::back_inserter(differ));
-    for (const std::uint32_t j : differ) {
-      const double dx = scene.x[i] - scene.x[j], dy = scene.y[i] - scene.y[j],
-                   dz = scene.z[i] - scene.z[j];
-      const double r = std::sqrt(dx * dx + dy * dy + dz * dz);
-      const double reach =
-          scene.has_diameters() ? 0.5 * (scene.diameter[i] + scene.diameter[j]) : diameter;
-      const double tolerance = float_tolerance(scene, reach);
-      if (std::abs(r - reach) > tolerance) {
-        if (bad < 5) {
-          failure << "\n  pair " << i << "-" << j << " at distance " << r << " (reach " << reach
-                  << ", |r - reach| / reach = " << std::abs(r - reach) / reach << ", tolerance "
-                  << tolerance / reach << ") judged "
-                  << (std::binary_search(a.begin(), a.end(), j) ? "in contact" : "not in contact")
-                  << " in float";
-        }
-        ++bad;
-      }
-    }
-  }
-  if (bad == 0) return ::testing::AssertionSuccess();
-  return failure << "\n  " << bad << " misjudged pair entries far from the contact distance";
 }
 
 struct Detected {

@@ -77,9 +77,8 @@ class ModelMethod final : public TuningMethod {
       table.push_back({{"variant", to_string(s.model_choice)}, {"predicted_s", s.predicted_s}});
       state.structures.push_back(std::move(s));
     }
-    // Without a tolerance the model cannot vouch for single precision: it never runs.
+    // Single precision too: its variants find the exact contacts (pair_test.hpp's FloatBand).
     for (const PricedStructure& s : state.structures) {
-      if (s.variant.precision != Precision::kDouble && options.tolerance == 0) continue;
       if (!state.model_best || s.predicted_s < state.model_best->predicted_s) state.model_best = &s;
     }
     if (!state.model_best) throw InputError("tune: no structure left to choose from");

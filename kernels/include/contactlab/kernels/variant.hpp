@@ -31,10 +31,10 @@ enum class Stencil { kFull, kHalf };
 
 enum class ScheduleKind { kStatic, kDynamic, kGuided };
 
-// Arithmetic of the pair test: double (exact reference) or float (coordinates relative to the
-// box's lower corner, rounded to single precision: half the memory traffic, but pairs whose
-// distance is within a few float ulps of the box extent of D can be misjudged; sweeps count
-// those errors and the tuner never picks such a variant without a tolerance).
+// Arithmetic of the pair test: double (the reference) or float (coordinates relative to the
+// box's lower corner, rounded to single precision: half the memory traffic). Float finds the
+// same contacts: the pairs within its rounding band of touching (pair_test.hpp's FloatBand)
+// are tested again in double.
 enum class Precision { kDouble, kFloat };
 
 struct Schedule {

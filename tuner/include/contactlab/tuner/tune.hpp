@@ -30,10 +30,11 @@ struct TuneOptions {
   // Tables 2-5, ours in results/); pass it explicitly to screen it too.
   std::vector<Order> orders{Order::kSorted, Order::kMorton};
   std::vector<Stencil> stencils{Stencil::kFull, Stencil::kHalf};
-  // Single precision is screened only with a tolerance (it is never chosen without one).
+  // Single precision is screened on request (`tune --float`); its variants decide the pairs
+  // within float rounding of touching in double, so they find the exact contacts too.
   std::vector<Precision> precisions{Precision::kDouble};
   // Wrong contact pairs a variant may have against the double-precision result and still be
-  // chosen (float variants); 0 = exact only.
+  // chosen (the search checks every screened variant); 0 = exact only.
   std::uint64_t tolerance = 0;
   bool predict_only = false;   // the model alone: no timed run on the scene
   bool exhaustive = false;     // also sweep the whole chunk grid (ground truth, costly)
