@@ -3,6 +3,7 @@
 // names the file and the JSON path.
 #include <gtest/gtest.h>
 
+#include <filesystem>
 #include <fstream>
 
 #include "contactlab/kernels/error.hpp"
@@ -44,6 +45,21 @@ std::string rejection(const TuningCache& cache) {
     return e.what();
   }
   return "";
+}
+
+// `--cache tuning.json` names a file in the working folder (no folder to create); a folder that
+// cannot be made (a file stands where it should be) is a one-line InputError.
+TEST(TuningCache, ABareFileNameIsSavedInTheWorkingFolder) {
+  test::TempDir dir;
+  const std::filesystem::path before = std::filesystem::current_path();
+  std::filesystem::current_path(dir.file(""));
+  TuningCache bare("tuning.json");
+  EXPECT_NO_THROW(bare.store_calibration(sample_calibration()));
+  std::filesystem::current_path(before);
+  EXPECT_TRUE(std::filesystem::exists(dir.file("tuning.json")));
+  std::ofstream(dir.file("blocker")) << "a file, not a folder\n";
+  TuningCache blocked(dir.file("blocker") + "/tuning.json");
+  EXPECT_THROW(blocked.store_calibration(sample_calibration()), InputError);
 }
 
 // An MPI run's choice (its setting: mode, ranks) is its own entry; a calibration sent between

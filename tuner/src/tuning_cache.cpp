@@ -161,7 +161,13 @@ json TuningCache::load() const {
 }
 
 void TuningCache::save(const json& document) const {
-  std::filesystem::create_directories(std::filesystem::path(path_).parent_path());
+  // A bare file name has no folder to make (create_directories("") throws).
+  const std::filesystem::path folder = std::filesystem::path(path_).parent_path();
+  std::error_code error;
+  if (!folder.empty()) std::filesystem::create_directories(folder, error);
+  if (error) {
+    throw InputError(path_ + ": cannot create the tuning cache's folder (" + error.message() + ")");
+  }
   write_file_atomically(path_, [&](std::ostream& out) { out << document.dump(2) << '\n'; });
 }
 
