@@ -28,6 +28,7 @@ struct TuneCommand {
   std::uint64_t tolerance_ = 0;
   int max_chunk_ = 65536;
   std::string orders_ = "sorted,morton";
+  std::string grids_ = "auto";
   int search_samples_ = tn::TuneOptions{}.search_samples;
   int exhaustive_rounds_ = tn::TuneOptions{}.exhaustive_rounds;
   int verify_rounds_ = tn::TuneOptions{}.verify_rounds;
@@ -53,6 +54,8 @@ void TuneCommand::add_to(CLI::App& sub) {
   sub.add_option("--tolerance", tolerance_, "wrong contact pairs allowed (single precision)");
   sub.add_option("--max-chunk", max_chunk_, "largest chunk of the grid 1, 2, 4, ...");
   sub.add_option("--orders", orders_, "orders to screen, comma-separated");
+  sub.add_option("--grids", grids_,
+                 "cell indexes to screen, comma-separated: auto (default), dense, hashed");
   sub.add_option("--search-samples", search_samples_, "timed runs per chunk the search evaluates")
       ->check(CLI::PositiveNumber);
   sub.add_option("--exhaustive-rounds", exhaustive_rounds_,
@@ -91,6 +94,8 @@ tn::TuneOptions TuneCommand::options() const {
   options.chunk_grid = tn::log2_chunk_grid(max_chunk_);
   options.orders.clear();
   for (const auto& order : split_list(orders_)) options.orders.push_back(parse_order(order));
+  options.grids.clear();
+  for (const auto& grid : split_list(grids_)) options.grids.push_back(parse_grid_index(grid));
   return options;
 }
 

@@ -1,4 +1,5 @@
-// Every variant (loop x order x stencil x schedule x precision from all_variants({1, 7, 64})) on
+// Every variant (loop x order x stencil x schedule x precision x grid index (dense and hashed)
+// from all_variants({1, 7, 64})) on
 // every scene kind with 1, 2 and 3 threads must reproduce the O(N^2) brute force exactly, and
 // report the same pair and candidate counts. Double variants are compared with
 // brute_force_contacts; float variants with the same brute force evaluated in float
@@ -6,7 +7,7 @@
 // float rounding of touching.
 //
 // One test per (scene kind, loop, order, stencil, precision); each runs the 10 schedules x 3
-// thread counts.
+// thread counts x 2 grid indexes.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -139,7 +140,7 @@ TEST_P(EveryVariantMatchesBruteForce, AllSchedulesAndThreadCounts) {
       EXPECT_EQ(d.run.grid_dims, grid.dims());
     }
   }
-  EXPECT_EQ(runs, 30);  // 10 schedules x 3 thread counts
+  EXPECT_EQ(runs, 60);  // 10 schedules x 3 thread counts x 2 grid indexes
   if (precision == Precision::kFloat) {
     EXPECT_TRUE(
         float_errors_near_contact_distance(ref.scene, ref.diameter, expected, ref.contacts));
@@ -193,8 +194,8 @@ TEST_P(SortedVariantsMatchBruteForce, OnThisSimdTarget) {
       }
     }
   }
-  EXPECT_EQ(runs, 5 * 2 * 2 * 2 * 2 * 2 * 2);  // kinds, loops, orders, stencils, precisions,
-                                               // schedules, thread counts
+  // kinds, loops, orders, stencils, precisions, grid indexes, schedules, thread counts
+  EXPECT_EQ(runs, 5 * 2 * 2 * 2 * 2 * 2 * 2 * 2);
   select_simd_target("best");
 }
 

@@ -45,13 +45,15 @@ inline Scene make_scene(const std::vector<Point>& points, const Box& box = Box{}
 }
 
 // The variants every equivalence test runs: 2 loops x 3 orders x 2 stencils x 10 schedules x
-// 2 precisions.
+// 2 precisions x 2 grid indexes (dense, hashed).
 inline std::vector<Variant> every_variant() { return enumerate(all_variants({1, 7, 64})); }
 
-// A few variants that between them cover every loop, order, stencil and precision (for the
-// expensive hard cases, where running all of them would cost time without covering more code).
+// A few variants that between them cover every loop, order, stencil and precision, on the
+// default (auto) grid index (for the expensive hard cases, where running all of them would cost
+// time without covering more code).
 inline std::vector<Variant> covering_variants() {
   VariantSpace space = all_variants({});
+  space.grids = {GridIndex::kAuto};
   space.schedules = {Schedule{ScheduleKind::kDynamic, 7}};
   return enumerate(space);
 }

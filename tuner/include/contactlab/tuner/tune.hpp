@@ -32,6 +32,9 @@ struct TuneOptions {
   std::vector<Stencil> stencils{Stencil::kFull, Stencil::kHalf};
   // Single precision is screened only with a tolerance (it is never chosen without one).
   std::vector<Precision> precisions{Precision::kDouble};
+  // The cell index: auto (the scene's rule, use_hashed_index) unless asked to screen dense and
+  // hashed, which runs each structure twice (dense only where the grid fits a dense table).
+  std::vector<GridIndex> grids{GridIndex::kAuto};
   // Wrong contact pairs a variant may have against the double-precision result and still be
   // chosen (float variants); 0 = exact only.
   std::uint64_t tolerance = 0;
