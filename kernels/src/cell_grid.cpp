@@ -82,7 +82,7 @@ bool use_hashed_index(GridIndex index, const CellGrid& grid, std::size_t particl
 
 std::size_t OccupiedCells::bytes() const {
   return key.capacity() * sizeof(std::uint64_t) + begin.capacity() * sizeof(std::uint32_t) +
-         table.capacity() * sizeof(Entry);
+         table.capacity() * sizeof(Entry) + filter.capacity() * sizeof(std::uint64_t);
 }
 
 void OccupiedCells::build_table(int threads) {
@@ -92,19 +92,30 @@ void OccupiedCells::build_table(int threads) {
   const std::size_t capacity = std::size_t{1} << bits;
   shift = 64 - bits;
   table.resize(capacity);
+  const int filter_bits = std::max(bits + 2, 6);  // 8 to 16 bits per cell, at least a word
+  filter_shift = 64 - filter_bits;
+  const std::size_t words = (std::size_t{1} << filter_bits) / 64;
+  filter.resize(words);
   const std::uint64_t mask = capacity - 1;
   Entry* const entries = table.data();
+  std::uint64_t* const filter_words = filter.data();
   const std::uint64_t* const keys = key.data();
 #pragma omp parallel num_threads(threads)
   {
-#pragma omp for schedule(static)
+#pragma omp for schedule(static) nowait
     for (std::size_t at = 0; at < capacity; ++at) entries[at] = {kEmpty, kNone};
+#pragma omp for schedule(static)
+    for (std::size_t w = 0; w < words; ++w) filter_words[w] = 0;
       // Keys are distinct, so a thread claims a free place with one compare-and-swap; where a
       // cell lands depends on the threads' timing, what find() returns does not.
 #pragma omp for schedule(static)
     for (std::uint64_t c = 0; c < cells; ++c) {
       const std::uint64_t k = keys[c];
-      for (std::uint64_t at = (k * kFibonacci) >> shift;; at = (at + 1) & mask) {
+      const std::uint64_t h = k * kFibonacci;
+      const std::uint64_t bit = h >> filter_shift;
+      std::atomic_ref<std::uint64_t>(filter_words[bit >> 6])
+          .fetch_or(std::uint64_t{1} << (bit & 63), std::memory_order_relaxed);
+      for (std::uint64_t at = h >> shift;; at = (at + 1) & mask) {
         std::atomic_ref<std::uint64_t> place(entries[at].key);
         std::uint64_t expected = kEmpty;
         if (place.load(std::memory_order_relaxed) == kEmpty &&

@@ -99,7 +99,7 @@ struct NeighbourRanges {
       if (linear) {
         if (r == stencil.own) own = count;
         const SlotRange range =
-            index.key_range(index.key(grid, x_lo, cy, cz), index.key(grid, x_hi, cy, cz));
+            index.key_range(r, index.key(grid, x_lo, cy, cz), index.key(grid, x_hi, cy, cz));
         if (range.begin == range.end) continue;  // never the own row: it holds the home
         ranges[count++] = range;
         candidates += range.end - range.begin;
@@ -109,7 +109,7 @@ struct NeighbourRanges {
       const std::uint64_t yz_part = Index::morton_part(1, cy) | Index::morton_part(2, cz);
       for (int cx = x_lo; cx <= x_hi; ++cx) {
         const std::uint64_t key = x_part[cx - home[0] + 1] | yz_part;
-        const SlotRange range = index.key_range(key, key);
+        const SlotRange range = index.key_range(3 * r + cx - home[0] + 1, key, key);
         if (range.begin == range.end) continue;  // never the home cell
         if (r == stencil.own && cx == home[0]) own = count;
         ranges[count++] = range;
@@ -133,6 +133,7 @@ struct Coordinates {
 template <class T>
 struct SortedLayout : Coordinates<T> {
   using Real = T;
+  static constexpr bool kIdsAreSlots = true;
   const std::uint32_t* slot_particle;  // slot -> input row
   std::uint32_t particle_at(std::uint32_t slot) const { return slot; }
   std::uint32_t slot_of(std::uint32_t particle) const { return particle; }
@@ -143,6 +144,7 @@ struct SortedLayout : Coordinates<T> {
 template <class T>
 struct UnsortedLayout : Coordinates<T> {
   using Real = T;
+  static constexpr bool kIdsAreSlots = false;
   const std::uint32_t* slot_particle;
   const std::uint32_t* particle_slot;
   std::uint32_t particle_at(std::uint32_t slot) const { return slot_particle[slot]; }
@@ -292,7 +294,9 @@ void traverse(const Spec& spec, const Layout& layout, Op& op) {
     }
   };
   if (spec.registry.hashed) {
-    with_index(HashedCellIndex{&spec.registry.occupied});
+    // Homes come in key order in the cell loop and in the particle loop over sorted particles.
+    const bool in_key_order = spec.loop == LoopKind::kCell || Layout::kIdsAreSlots;
+    with_index(HashedCellIndex{&spec.registry.occupied, in_key_order});
   } else {
     with_index(DenseCellIndex{spec.registry.cell_begin.data(), spec.grid.key_count()});
   }
