@@ -199,7 +199,7 @@ void CellRegistry::sort_and_index(const CellGrid& grid, const Scene& scene, std:
   constexpr int kDigitBits = 12;
   constexpr std::size_t kBuckets = std::size_t{1} << kDigitBits;
   const int passes = (key_bits + kDigitBits - 1) / kDigitBits;
-  const bool wide = hashed;
+  const bool wide_keys = hashed;  // 64-bit keys (any grid); the dense table's are 32-bit
 
   buffer.resize(n);
   scratch.resize(n);
@@ -218,7 +218,8 @@ void CellRegistry::sort_and_index(const CellGrid& grid, const Scene& scene, std:
     const std::size_t b = n * t / size, e = n * (t + 1) / size;
     for (std::size_t i = b; i < e; ++i) {
       const auto c = grid.coords_of(scene.x[i], scene.y[i], scene.z[i]);
-      from[i] = Entry::make(wide ? grid.wide_key(c[0], c[1], c[2]) : grid.key(c[0], c[1], c[2]), i);
+      from[i] =
+          Entry::make(wide_keys ? grid.wide_key(c[0], c[1], c[2]) : grid.key(c[0], c[1], c[2]), i);
     }
     std::uint64_t* mine = histograms_.data() + t * kBuckets;
     Entry* in = from;
