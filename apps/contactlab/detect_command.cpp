@@ -113,9 +113,11 @@ void print_summary(const char* name, const tn::Summary& s) {
 void print_run(const tn::RunRecord& run, std::size_t particles) {
   const tn::RunAggregates& a = *run.aggregates;
   const tn::RunWork& w = *run.work;
-  fmt::print("variant {}  threads {}  N {}  grid {}x{}x{}  max occupancy {}\n",
+  const auto hashed = run.work_counts.find("hashed_index");
+  const bool hashed_index = hashed != run.work_counts.end() && hashed->second != 0;
+  fmt::print("variant {}  threads {}  N {}  grid {}x{}x{} ({} index)  max occupancy {}\n",
              run.parameters.variant, run.parameters.threads, particles, w.grid[0], w.grid[1],
-             w.grid[2], w.max_cell_occupancy);
+             w.grid[2], hashed_index ? "hashed" : "dense", w.max_cell_occupancy);
   fmt::print("{} repetitions after {} warm-up ({}), T_ALL = T_s + T_c:\n", a.repetitions,
              a.warmup_runs, tn::to_string(a.stop_reason));
   print_summary("T_s", a.setup_s);

@@ -29,6 +29,7 @@ struct TuneCommand {
   bool float_ = false;
   int max_chunk_ = 65536;
   std::string orders_ = "sorted,morton";
+  std::string grids_ = "auto";
   int search_samples_ = tn::TuneOptions{}.search_samples;
   int exhaustive_rounds_ = tn::TuneOptions{}.exhaustive_rounds;
   int verify_rounds_ = tn::TuneOptions{}.verify_rounds;
@@ -51,10 +52,13 @@ void TuneCommand::add_to(CLI::App& sub) {
   sub.add_flag("--predict-only", predict_only_, "the model alone: no timed run on the scene");
   sub.add_flag("--exhaustive", exhaustive_, "also sweep every chunk (ground truth)");
   sub.add_flag("--recalibrate", recalibrate_, "fit the machine's cost model again");
-  sub.add_flag("--float", float_, "screen the single-precision variants too (exact: near-ties in double)");
+  sub.add_flag("--float", float_,
+               "screen the single-precision variants too (exact: near-ties in double)");
   sub.add_option("--tolerance", tolerance_, "wrong contact pairs allowed (implies --float)");
   sub.add_option("--max-chunk", max_chunk_, "largest chunk of the grid 1, 2, 4, ...");
   sub.add_option("--orders", orders_, "orders to screen, comma-separated");
+  sub.add_option("--grids", grids_,
+                 "cell indexes to screen, comma-separated: auto (default), dense, hashed");
   sub.add_option("--search-samples", search_samples_, "timed runs per chunk the search evaluates")
       ->check(CLI::PositiveNumber);
   sub.add_option("--exhaustive-rounds", exhaustive_rounds_,
@@ -93,6 +97,8 @@ tn::TuneOptions TuneCommand::options() const {
   options.chunk_grid = tn::log2_chunk_grid(max_chunk_);
   options.orders.clear();
   for (const auto& order : split_list(orders_)) options.orders.push_back(parse_order(order));
+  options.grids.clear();
+  for (const auto& grid : split_list(grids_)) options.grids.push_back(parse_grid_index(grid));
   return options;
 }
 

@@ -3,6 +3,7 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <atomic>
 #include <string>
 #include <utility>
 
@@ -16,7 +17,8 @@ CellGrid::CellGrid(const Box& box, double min_width, CellNumbering numbering)
     throw InputError("cell width (diameter D) must be a positive finite number, got " +
                      std::to_string(min_width));
   }
-  std::uint64_t cells = 1;
+  const int axis_limit = numbering == CellNumbering::kLinear ? kMaxAxisCells : kMaxMortonAxisCells;
+  double cells = 1.0;
   for (int axis = 0; axis < 3; ++axis) {
     const double extent = box.extent(axis);
     // Widen the cell a little beyond D so that two particles at distance D (give or take the
@@ -29,113 +31,133 @@ CellGrid::CellGrid(const Box& box, double min_width, CellNumbering numbering)
     const double widening = std::max(0x1.0p-40, 0x1.0p-46 * (cells_estimate + origin_scale));
     const double width = min_width * (1.0 + widening);
     const double per_axis = std::floor(extent / width);
-    if (per_axis > double(kMaxKeys)) {
+    if (per_axis > double(axis_limit)) {
       throw InputError("cell grid too large: D = " + std::to_string(min_width) +
-                       " is too small for the box (more than 2^28 cells)");
+                       " is too small for the box (more than " + std::to_string(axis_limit) +
+                       " cells along one axis" +
+                       (numbering == CellNumbering::kMorton ? " with Morton numbering)" : ")"));
     }
     dims_[axis] = std::max(1, static_cast<int>(per_axis));
-    cells *= std::uint64_t(dims_[axis]);
+    cells *= double(dims_[axis]);
     lo_[axis] = box.lo[axis];
     width_[axis] = extent / dims_[axis];
     inverse_width_[axis] = dims_[axis] / extent;
   }
   if (numbering == CellNumbering::kLinear) {
-    key_count_ = cells;
+    if (cells > 0x1.0p62) {  // keys and key + 1 stay far from overflow
+      throw InputError("cell grid too large: " + std::to_string(dims_[0]) + "x" +
+                       std::to_string(dims_[1]) + "x" + std::to_string(dims_[2]) +
+                       " cells exceed 2^62 keys (D = " + std::to_string(min_width) +
+                       " is too small for the box)");
+    }
+    key_count_ = cell_count();
   } else {
     const int largest = std::max({dims_[0], dims_[1], dims_[2]});
     int bits = 0;
     while ((1 << bits) < largest) ++bits;
     key_count_ = std::uint64_t{1} << (3 * bits);
   }
-  if (key_count_ > kMaxKeys) {
-    throw InputError("cell grid too large: " + std::to_string(dims_[0]) + "x" +
-                     std::to_string(dims_[1]) + "x" + std::to_string(dims_[2]) +
-                     " cells exceed 2^28 keys (D = " + std::to_string(min_width) +
-                     " is too small for the box)");
+}
+
+bool use_hashed_index(GridIndex index, const CellGrid& grid, std::size_t particles) {
+  switch (index) {
+    case GridIndex::kDense:
+      if (!grid.dense_fits()) {
+        const auto& d = grid.dims();
+        throw InputError("grid=dense: the " + std::to_string(d[0]) + "x" + std::to_string(d[1]) +
+                         "x" + std::to_string(d[2]) + " grid needs " +
+                         std::to_string(grid.key_count()) +
+                         " keys, more than a dense table's 2^28 (use grid=hashed or grid=auto)");
+      }
+      return false;
+    case GridIndex::kHashed:
+      return true;
+    case GridIndex::kAuto:
+      break;
+  }
+  const std::uint64_t keys = grid.key_count();
+  return !grid.dense_fits() ||
+         (keys > kDenseKeysAlways && keys / kDenseKeysPerParticle > std::uint64_t{particles});
+}
+
+std::size_t OccupiedCells::bytes() const {
+  return key.capacity() * sizeof(std::uint64_t) + begin.capacity() * sizeof(std::uint32_t) +
+         table.capacity() * sizeof(Entry) + filter.capacity() * sizeof(std::uint64_t);
+}
+
+void OccupiedCells::build_table(int threads) {
+  const std::uint64_t cells = size();
+  int bits = 1;
+  while ((std::uint64_t{1} << bits) < 2 * cells) ++bits;
+  const std::size_t capacity = std::size_t{1} << bits;
+  shift = 64 - bits;
+  table.resize(capacity);
+  const int filter_bits = std::max(bits + 2, 6);  // 8 to 16 bits per cell, at least a word
+  filter_shift = 64 - filter_bits;
+  const std::size_t words = (std::size_t{1} << filter_bits) / 64;
+  filter.resize(words);
+  const std::uint64_t mask = capacity - 1;
+  Entry* const entries = table.data();
+  std::uint64_t* const filter_words = filter.data();
+  const std::uint64_t* const keys = key.data();
+#pragma omp parallel num_threads(threads)
+  {
+#pragma omp for schedule(static) nowait
+    for (std::size_t at = 0; at < capacity; ++at) entries[at] = {kEmpty, kNone};
+#pragma omp for schedule(static)
+    for (std::size_t w = 0; w < words; ++w) filter_words[w] = 0;
+      // Keys are distinct, so a thread claims a free place with one compare-and-swap; where a
+      // cell lands depends on the threads' timing, what find() returns does not.
+#pragma omp for schedule(static)
+    for (std::uint64_t c = 0; c < cells; ++c) {
+      const std::uint64_t k = keys[c];
+      const std::uint64_t h = k * kFibonacci;
+      const std::uint64_t bit = h >> filter_shift;
+      std::atomic_ref<std::uint64_t>(filter_words[bit >> 6])
+          .fetch_or(std::uint64_t{1} << (bit & 63), std::memory_order_relaxed);
+      for (std::uint64_t at = h >> shift;; at = (at + 1) & mask) {
+        std::atomic_ref<std::uint64_t> place(entries[at].key);
+        std::uint64_t expected = kEmpty;
+        if (place.load(std::memory_order_relaxed) == kEmpty &&
+            place.compare_exchange_strong(expected, k, std::memory_order_relaxed)) {
+          entries[at].cell = static_cast<std::uint32_t>(c);
+          break;
+        }
+      }
+    }
   }
 }
 
-void CellRegistry::assign(const CellGrid& grid, const Scene& scene, SortedCoordinates* sorted,
-                          int threads) {
-  const std::size_t n = scene.size();
-  const std::uint64_t keys = grid.key_count();
-  // Sort (key, input index) pairs by key with a stable LSD radix sort. A counting sort over
-  // the cell table would touch the (up to 2^28-entry) table at random once per particle; the
-  // radix passes keep their 2^kDigitBits counters in L1 and write in sequential streams.
-  // In parallel: each thread counts its contiguous range of the input, the ranges' offsets
-  // are laid out bucket by bucket in thread order (so the sort stays stable and the result is
-  // the same for any thread count), and each thread scatters its range.
-  constexpr int kDigitBits = 12;
-  constexpr std::size_t kBuckets = std::size_t{1} << kDigitBits;
-  int key_bits = 1;
-  while ((std::uint64_t{1} << key_bits) < keys) ++key_bits;
-  const int passes = (key_bits + kDigitBits - 1) / kDigitBits;
-  const auto team = static_cast<std::size_t>(std::max(1, threads));
+std::size_t CellRegistry::index_bytes() const {
+  return hashed ? occupied.bytes() : cell_begin.capacity() * sizeof(std::uint32_t);
+}
 
-  sort_buffer_.resize(n);
-  sort_scratch_.resize(n);
-  slot_particle.resize(n);
-  cell_begin.resize(keys + 1);
-  histograms_.assign(team * kBuckets, 0);
-  std::uint32_t largest = 0;
-  std::uint64_t* from = sort_buffer_.data();
-  std::uint64_t* to = sort_scratch_.data();
-  std::uint64_t squares = 0;
-#pragma omp parallel num_threads(static_cast <int>(team)) reduction(max : largest) \
-    reduction(+ : squares)
-  {
-    const auto t = static_cast<std::size_t>(omp_get_thread_num());
-    const std::size_t size = static_cast<std::size_t>(omp_get_num_threads());
-    const std::size_t b = n * t / size, e = n * (t + 1) / size;
-    for (std::size_t i = b; i < e; ++i) {
-      const auto c = grid.coords_of(scene.x[i], scene.y[i], scene.z[i]);
-      from[i] = (std::uint64_t{grid.key(c[0], c[1], c[2])} << 32) | i;
-    }
-    std::uint64_t* mine = histograms_.data() + t * kBuckets;
-    std::uint64_t* in = from;
-    std::uint64_t* out = to;
-    for (int pass = 0; pass < passes; ++pass) {
-      const int shift = 32 + pass * kDigitBits;
-      std::fill(mine, mine + kBuckets, 0);
-      for (std::size_t i = b; i < e; ++i) ++mine[(in[i] >> shift) & (kBuckets - 1)];
-#pragma omp barrier
-#pragma omp single
-      {  // offsets: bucket by bucket, within a bucket thread by thread
-        std::uint64_t running = 0;
-        for (std::size_t bucket = 0; bucket < kBuckets; ++bucket) {
-          for (std::size_t u = 0; u < size; ++u) {
-            running += std::exchange(histograms_[u * kBuckets + bucket], running);
-          }
-        }
-      }  // implicit barrier
-      for (std::size_t i = b; i < e; ++i) out[mine[(in[i] >> shift) & (kBuckets - 1)]++] = in[i];
-      std::swap(in, out);
-#pragma omp barrier
-    }
-    // Slots in key order; cell_begin[k] = first slot whose key is >= k. Each thread fills the
-    // keys from the one before its range's first new cell up to its last: disjoint ranges.
-    for (std::size_t s = b; s < e; ++s) {
-      const std::uint64_t entry = in[s];
-      const std::uint64_t slot_key = entry >> 32;
-      slot_particle[s] = static_cast<std::uint32_t>(entry);
-      const std::uint64_t previous = s == 0 ? 0 : (in[s - 1] >> 32) + 1;
-      if (s > 0 && slot_key + 1 == previous) continue;  // same cell as the slot before
-      for (std::uint64_t k = previous; k <= slot_key; ++k) {
-        cell_begin[k] = static_cast<std::uint32_t>(s);
-      }
-      std::size_t end = s + 1;  // the cell's run, possibly into the next thread's range
-      while (end < n && (in[end] >> 32) == slot_key) ++end;
-      largest = std::max(largest, static_cast<std::uint32_t>(end - s));
-      squares += std::uint64_t{end - s} * (end - s);
-    }
-    if (t + 1 == size) {  // the keys past the last particle's (all of them when there is none)
-      const std::uint64_t after = n == 0 ? 0 : (in[n - 1] >> 32) + 1;
-      for (std::uint64_t k = after; k <= keys; ++k) cell_begin[k] = static_cast<std::uint32_t>(n);
-    }
+void CellRegistry::assign(const CellGrid& grid, const Scene& scene, SortedCoordinates* sorted,
+                          int threads, bool hashed_index) {
+  if (!hashed_index)
+    use_hashed_index(GridIndex::kDense, grid, scene.size());  // throws if too large
+  hashed = hashed_index;
+  const std::size_t n = scene.size();
+  const auto team = static_cast<std::size_t>(std::max(1, threads));
+  // Only the index in use keeps memory: a hashed grid's dense table could be gigabytes.
+  if (hashed) {
+    LargeVector<std::uint32_t>().swap(cell_begin);
+  } else {
+    occupied = {};
   }
-  if (passes % 2 == 1) sort_buffer_.swap(sort_scratch_);  // the sorted entries' vector first
-  max_occupancy = largest;
-  occupancy_squares = squares;
+  int key_bits = 1;
+  while (key_bits < 64 && (std::uint64_t{1} << key_bits) < grid.key_count()) ++key_bits;
+  slot_particle.resize(n);
+  if (key_bits <= 32) {
+    LargeVector<WideEntry>().swap(wide_buffer_);
+    LargeVector<WideEntry>().swap(wide_scratch_);
+    sort_and_index(grid, scene, team, key_bits, sort_buffer_, sort_scratch_);
+  } else {
+    LargeVector<NarrowEntry>().swap(sort_buffer_);
+    LargeVector<NarrowEntry>().swap(sort_scratch_);
+    sort_and_index(grid, scene, team, key_bits, wide_buffer_, wide_scratch_);
+  }
+  if (hashed) occupied.build_table(static_cast<int>(team));
 
   if (sorted) {
     // The paper's reordering: coordinates copied into slot order.
@@ -159,6 +181,116 @@ void CellRegistry::assign(const CellGrid& grid, const Scene& scene, SortedCoordi
     for (std::size_t s = 0; s < n; ++s)
       particle_slot[slot_particle[s]] = static_cast<std::uint32_t>(s);
   }
+}
+
+// Sorts (key, input index) entries by key with a stable LSD radix sort, fills slot_particle
+// and the cell index. A counting sort over the cell table would touch the (up to
+// 2^28-entry) table at random once per particle; the radix passes keep their 2^kDigitBits
+// counters in L1 and write in sequential streams. In parallel: each thread counts its
+// contiguous range of the input, the ranges' offsets are laid out bucket by bucket in thread
+// order (so the sort stays stable and the result is the same for any thread count), and each
+// thread scatters its range.
+template <class Entry>
+void CellRegistry::sort_and_index(const CellGrid& grid, const Scene& scene, std::size_t team,
+                                  int key_bits, LargeVector<Entry>& buffer,
+                                  LargeVector<Entry>& scratch) {
+  const std::size_t n = scene.size();
+  const std::uint64_t keys = grid.key_count();
+  constexpr int kDigitBits = 12;
+  constexpr std::size_t kBuckets = std::size_t{1} << kDigitBits;
+  const int passes = (key_bits + kDigitBits - 1) / kDigitBits;
+  const bool wide_keys = hashed;  // 64-bit keys (any grid); the dense table's are 32-bit
+
+  buffer.resize(n);
+  scratch.resize(n);
+  if (!hashed) cell_begin.resize(keys + 1);
+  histograms_.assign(team * kBuckets, 0);
+  new_cells_.assign(team + 1, 0);
+  std::uint32_t largest = 0;
+  Entry* from = buffer.data();
+  Entry* to = scratch.data();
+  std::uint64_t squares = 0;
+#pragma omp parallel num_threads(static_cast <int>(team)) reduction(max : largest) \
+    reduction(+ : squares)
+  {
+    const auto t = static_cast<std::size_t>(omp_get_thread_num());
+    const std::size_t size = static_cast<std::size_t>(omp_get_num_threads());
+    const std::size_t b = n * t / size, e = n * (t + 1) / size;
+    for (std::size_t i = b; i < e; ++i) {
+      const auto c = grid.coords_of(scene.x[i], scene.y[i], scene.z[i]);
+      from[i] =
+          Entry::make(wide_keys ? grid.wide_key(c[0], c[1], c[2]) : grid.key(c[0], c[1], c[2]), i);
+    }
+    std::uint64_t* mine = histograms_.data() + t * kBuckets;
+    Entry* in = from;
+    Entry* out = to;
+    for (int pass = 0; pass < passes; ++pass) {
+      const int shift = pass * kDigitBits;
+      std::fill(mine, mine + kBuckets, 0);
+      for (std::size_t i = b; i < e; ++i) ++mine[(in[i].key() >> shift) & (kBuckets - 1)];
+#pragma omp barrier
+#pragma omp single
+      {  // offsets: bucket by bucket, within a bucket thread by thread
+        std::uint64_t running = 0;
+        for (std::size_t bucket = 0; bucket < kBuckets; ++bucket) {
+          for (std::size_t u = 0; u < size; ++u) {
+            running += std::exchange(histograms_[u * kBuckets + bucket], running);
+          }
+        }
+      }  // implicit barrier
+      for (std::size_t i = b; i < e; ++i)
+        out[mine[(in[i].key() >> shift) & (kBuckets - 1)]++] = in[i];
+      std::swap(in, out);
+#pragma omp barrier
+    }
+    // Slots in key order. A cell starts at slot s when s == 0 or slot s - 1 has another key.
+    auto starts_cell = [&](std::size_t s) { return s == 0 || in[s - 1].key() != in[s].key(); };
+    std::uint64_t cells_here = 0;
+    for (std::size_t s = b; s < e; ++s) {
+      slot_particle[s] = in[s].index();
+      if (!starts_cell(s)) continue;
+      ++cells_here;
+      const std::uint64_t slot_key = in[s].key();
+      if (!hashed) {
+        // cell_begin[k] = first slot whose key is >= k. Each thread fills the keys from the one
+        // after the previous slot's up to its cell's: disjoint ranges.
+        const std::uint64_t previous = s == 0 ? 0 : in[s - 1].key() + 1;
+        for (std::uint64_t k = previous; k <= slot_key; ++k) {
+          cell_begin[k] = static_cast<std::uint32_t>(s);
+        }
+      }
+      std::size_t end = s + 1;  // the cell's run, possibly into the next thread's range
+      while (end < n && in[end].key() == slot_key) ++end;
+      largest = std::max(largest, static_cast<std::uint32_t>(end - s));
+      squares += std::uint64_t{end - s} * (end - s);
+    }
+    if (!hashed && t + 1 == size) {  // the keys past the last particle's (all when there is none)
+      const std::uint64_t after = n == 0 ? 0 : in[n - 1].key() + 1;
+      for (std::uint64_t k = after; k <= keys; ++k) cell_begin[k] = static_cast<std::uint32_t>(n);
+    }
+    if (hashed) {
+      // The occupied cells, listed by each thread for its slots at its place in the list.
+      new_cells_[t + 1] = cells_here;
+#pragma omp barrier
+#pragma omp single
+      {
+        for (std::size_t u = 0; u < size; ++u) new_cells_[u + 1] += new_cells_[u];
+        occupied.key.resize(new_cells_[size]);
+        occupied.begin.resize(new_cells_[size] + 1);
+        occupied.begin[new_cells_[size]] = static_cast<std::uint32_t>(n);
+      }  // implicit barrier
+      std::uint64_t c = new_cells_[t];
+      for (std::size_t s = b; s < e; ++s) {
+        if (!starts_cell(s)) continue;
+        occupied.key[c] = in[s].key();
+        occupied.begin[c] = static_cast<std::uint32_t>(s);
+        ++c;
+      }
+    }
+  }
+  if (passes % 2 == 1) buffer.swap(scratch);  // the sorted entries' vector first
+  max_occupancy = largest;
+  occupancy_squares = squares;
 }
 
 }  // namespace contactlab

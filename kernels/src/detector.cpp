@@ -224,9 +224,12 @@ CellGrid ContactDetector::prepare(const Scene& scene, const DetectOptions& optio
 
   const double setup_start = omp_get_wtime();
   working_is_sorted_ = order != Order::kUnsorted;
-  registry_.assign(grid, scene, working_is_sorted_ ? &sorted_ : nullptr, run.threads);
+  registry_.assign(grid, scene, working_is_sorted_ ? &sorted_ : nullptr, run.threads,
+                   use_hashed_index(options.variant.grid, grid, scene.size()));
   run.setup_s = omp_get_wtime() - setup_start;
   run.max_cell_occupancy = registry_.max_occupancy;
+  run.hashed_index = registry_.hashed;
+  run.index_bytes = registry_.index_bytes();
   return grid;
 }
 
@@ -371,8 +374,9 @@ LoopWork ContactDetector::iteration_work(const Scene& scene, const DetectOptions
   DetectRun run;
   const CellGrid grid = prepare(scene, options, 0.0, run);
   const Variant& variant = options.variant;
-  const std::size_t iterations =
-      variant.loop == LoopKind::kParticle ? scene.size() : grid.key_count();
+  const std::size_t iterations = variant.loop == LoopKind::kParticle
+                                     ? scene.size()
+                                     : traversal::cell_iterations(grid, registry_);
   LoopWork work;
   work.tests.assign(iterations, 0);
   work.homes.assign(iterations, 0);

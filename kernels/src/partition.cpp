@@ -30,6 +30,11 @@ void add_to_histogram(const CellGrid& grid, const Scene& scene, CellHistogram& h
   if (grid.numbering() != CellNumbering::kLinear) {
     throw InputError("add_to_histogram: the grid must number its cells linearly");
   }
+  if (!grid.dense_fits()) {  // the histogram has an entry per cell
+    throw InputError("add_to_histogram: the " + std::to_string(grid.dims()[0]) + "x" +
+                     std::to_string(grid.dims()[1]) + "x" + std::to_string(grid.dims()[2]) +
+                     " grid has more than 2^28 cells (the partition needs a dense histogram)");
+  }
   if (histogram.dims != grid.dims() || histogram.count.size() != grid.cell_count()) {
     histogram.dims = grid.dims();
     histogram.count.assign(grid.cell_count(), 0);

@@ -19,6 +19,8 @@ constexpr NameTable<Order, 3> kOrders{
 constexpr NameTable<Stencil, 2> kStencils{{{Stencil::kFull, "full"}, {Stencil::kHalf, "half"}}};
 constexpr NameTable<Precision, 2> kPrecisions{
     {{Precision::kDouble, "double"}, {Precision::kFloat, "float"}}};
+constexpr NameTable<GridIndex, 3> kGridIndexes{
+    {{GridIndex::kAuto, "auto"}, {GridIndex::kDense, "dense"}, {GridIndex::kHashed, "hashed"}}};
 constexpr NameTable<ScheduleKind, 3> kScheduleKinds{{{ScheduleKind::kStatic, "static"},
                                                      {ScheduleKind::kDynamic, "dynamic"},
                                                      {ScheduleKind::kGuided, "guided"}}};
@@ -61,6 +63,7 @@ std::string_view to_string(Order order) { return name_of(kOrders, order); }
 std::string_view to_string(Stencil stencil) { return name_of(kStencils, stencil); }
 std::string_view to_string(ScheduleKind kind) { return name_of(kScheduleKinds, kind); }
 std::string_view to_string(Precision precision) { return name_of(kPrecisions, precision); }
+std::string_view to_string(GridIndex index) { return name_of(kGridIndexes, index); }
 
 std::string to_string(const Schedule& schedule) {
   std::string text(to_string(schedule.kind));
@@ -76,6 +79,10 @@ Order parse_order(std::string_view text) { return parse_name(kOrders, text, "ord
 Stencil parse_stencil(std::string_view text) { return parse_name(kStencils, text, "stencil"); }
 Precision parse_precision(std::string_view text) {
   return parse_name(kPrecisions, text, "precision");
+}
+
+GridIndex parse_grid_index(std::string_view text) {
+  return parse_name(kGridIndexes, text, "grid index");
 }
 
 Schedule parse_schedule(std::string_view text) {
@@ -153,6 +160,10 @@ const std::vector<VariantAxis>& variant_axes() {
        "double | float: float is relative to the box corner (half the traffic, may misjudge "
        "near-ties)",
        false, parse_into<&Variant::precision, parse_precision>, print_of<&Variant::precision>},
+      {"grid", "how a cell's particles are found", names_of(kGridIndexes),
+       "auto | dense | hashed: a table entry per cell (<= 2^28 keys), a hash table over the "
+       "occupied cells (memory ~ N), or the one use_hashed_index picks for the scene",
+       false, parse_into<&Variant::grid, parse_grid_index>, print_of<&Variant::grid>},
   };
   return axes;
 }
@@ -242,8 +253,10 @@ std::vector<Variant> enumerate(const VariantSpace& space) {
       for (const auto stencil : space.stencils) {
         for (const auto& schedule : space.schedules) {
           for (const auto precision : space.precisions) {
-            const Variant v{loop, order, stencil, schedule, precision};
-            if (!broken_rule(v)) variants.push_back(v);
+            for (const auto grid : space.grids) {
+              const Variant v{loop, order, stencil, schedule, precision, grid};
+              if (!broken_rule(v)) variants.push_back(v);
+            }
           }
         }
       }
@@ -275,6 +288,7 @@ VariantSpace all_variants(const std::vector<int>& chunks) {
   for (const auto& entry : kStencils) space.stencils.push_back(entry.first);
   space.precisions.clear();
   for (const auto& entry : kPrecisions) space.precisions.push_back(entry.first);
+  space.grids = {GridIndex::kDense, GridIndex::kHashed};
   space.schedules.push_back({ScheduleKind::kStatic, 0});
   for (const auto& entry : kScheduleKinds) {
     for (const int chunk : chunks) space.schedules.push_back({entry.first, chunk});

@@ -62,15 +62,44 @@ TEST(CellGrid, RejectsBadWidths) {
     EXPECT_THROW(CellGrid(Box{}, d, CellNumbering::kLinear), InputError) << "D = " << d;
     EXPECT_THROW(CellGrid(Box{}, d, CellNumbering::kMorton), InputError) << "D = " << d;
   }
-  // More than 2^28 cells.
-  EXPECT_THROW(CellGrid(Box{}, 1e-4, CellNumbering::kLinear), InputError);
+  // More than 2^28 keys is a grid for the hashed index, not an error (hashed_grid_gtest.cpp).
+  EXPECT_FALSE(CellGrid(Box{}, 1e-4, CellNumbering::kLinear).dense_fits());
+  EXPECT_FALSE(CellGrid(Box{}, 1e-4, CellNumbering::kMorton).dense_fits());
+  EXPECT_TRUE(CellGrid(Box{}, 1.0 / 512, CellNumbering::kMorton).dense_fits());
+  // The limits are per axis: 2^30 cells (linear), 2^21 (Morton, 21 key bits an axis).
   EXPECT_THROW(CellGrid(Box{}, 1e-300, CellNumbering::kLinear), InputError);
-  EXPECT_THROW(CellGrid(Box{}, 1e-4, CellNumbering::kMorton), InputError);
-  // The limit is on keys, not on the box's shape: 2^27 x 1 x 1 cells fit, 2^29 x 1 x 1 do not.
-  const Box thin{{0, 0, 0}, {double(CellGrid::kMaxKeys / 2), 1, 1}};
+  EXPECT_THROW(CellGrid(Box{}, 1e-7, CellNumbering::kMorton), InputError);
+  EXPECT_NO_THROW(CellGrid(Box{}, 1e-6, CellNumbering::kMorton));
+  const Box thin{{0, 0, 0}, {double(CellGrid::kMaxKeys * 2), 1, 1}};
   EXPECT_NO_THROW(CellGrid(thin, 1.0, CellNumbering::kLinear));
-  const Box thinner{{0, 0, 0}, {double(CellGrid::kMaxKeys * 2), 1, 1}};
+  const Box thinner{{0, 0, 0}, {double(CellGrid::kMaxAxisCells) * 2, 1, 1}};
   EXPECT_THROW(CellGrid(thinner, 1.0, CellNumbering::kLinear), InputError);
+  // Linear keys must fit in 62 bits: 2^21 x 2^21 x 2^21 cells do not.
+  const Box cube{{0, 0, 0}, {0x1.0p21 + 1, 0x1.0p21 + 1, 0x1.0p21 + 1}};
+  EXPECT_THROW(CellGrid(cube, 1.0, CellNumbering::kLinear), InputError);
+}
+
+TEST(CellGrid, WideKeysAreTheKeysWhereBothExist) {
+  for (const auto numbering : {CellNumbering::kLinear, CellNumbering::kMorton}) {
+    const CellGrid grid(Box{{0, 0, 0}, {1, 2, 3}}, 0.11, numbering);
+    const auto& dims = grid.dims();
+    for (int cz = 0; cz < dims[2]; ++cz) {
+      for (int cy = 0; cy < dims[1]; ++cy) {
+        for (int cx = 0; cx < dims[0]; ++cx) {
+          ASSERT_EQ(grid.wide_key(cx, cy, cz), grid.key(cx, cy, cz));
+        }
+      }
+    }
+  }
+  // Beyond 32 bits: linear keys are (z G_y + y) G_x + x, Morton keys interleave 21 bits.
+  const CellGrid linear(Box{}, 1e-5, CellNumbering::kLinear);
+  const std::uint64_t g = static_cast<std::uint64_t>(linear.dims()[0]);
+  EXPECT_EQ(linear.wide_key(1, 2, 3), (3 * g + 2) * g + 1);
+  EXPECT_EQ(linear.wide_key(linear.dims()[0] - 1, linear.dims()[1] - 1, linear.dims()[2] - 1),
+            linear.cell_count() - 1);
+  const CellGrid morton(Box{}, 1e-6, CellNumbering::kMorton);
+  EXPECT_EQ(morton.wide_key(1 << 20, 0, 0), std::uint64_t{1} << 60);
+  EXPECT_EQ(morton.wide_key(0, 1 << 20, 1 << 20), std::uint64_t{3} << 61);
 }
 
 TEST(CellGrid, UpperFacesLandInTheLastCell) {

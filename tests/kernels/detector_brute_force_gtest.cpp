@@ -1,10 +1,11 @@
-// Every variant (loop x order x stencil x schedule x precision from all_variants({1, 7, 64})) on
+// Every variant (loop x order x stencil x schedule x precision x grid index: every_variant(),
+// the hashed index with two of the schedules) on
 // every scene kind with 1, 2 and 3 threads must reproduce the O(N^2) brute force exactly, and
 // report the same pair and candidate counts: brute_force_contacts, float variants included
 // (they decide the pairs within float rounding of touching in double).
 //
 // One test per (scene kind, loop, order, stencil, precision); each runs the 10 schedules x 3
-// thread counts.
+// thread counts on the dense index, and 2 schedules x 3 thread counts on the hashed one.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -132,7 +133,7 @@ TEST_P(EveryVariantMatchesBruteForce, AllSchedulesAndThreadCounts) {
       EXPECT_EQ(d.run.grid_dims, grid.dims());
     }
   }
-  EXPECT_EQ(runs, 30);  // 10 schedules x 3 thread counts
+  EXPECT_EQ(runs, 36);  // (10 dense + 2 hashed schedules) x 3 thread counts
 }
 
 std::string param_name(const ::testing::TestParamInfo<Params>& info) {
@@ -181,8 +182,8 @@ TEST_P(SortedVariantsMatchBruteForce, OnThisSimdTarget) {
       }
     }
   }
-  EXPECT_EQ(runs, 5 * 2 * 2 * 2 * 2 * 2 * 2);  // kinds, loops, orders, stencils, precisions,
-                                               // schedules, thread counts
+  // kinds, loops, orders, stencils, precisions, grid indexes, schedules, thread counts
+  EXPECT_EQ(runs, 5 * 2 * 2 * 2 * 2 * 2 * 2 * 2);
   select_simd_target("best");
 }
 

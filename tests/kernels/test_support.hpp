@@ -44,14 +44,27 @@ inline Scene make_scene(const std::vector<Point>& points, const Box& box = Box{}
   return scene;
 }
 
-// The variants every equivalence test runs: 2 loops x 3 orders x 2 stencils x 10 schedules x
-// 2 precisions.
-inline std::vector<Variant> every_variant() { return enumerate(all_variants({1, 7, 64})); }
+// The variants every equivalence test runs: 2 loops x 3 orders x 2 stencils x 2 precisions with
+// the dense index and 10 schedules, and with the hashed index and 2 schedules (block and
+// dynamic,7: the index changes where a stencil's ranges are found, not how a schedule divides
+// the loop, and all 10 would double the cost of every suite that runs this list).
+inline std::vector<Variant> every_variant() {
+  VariantSpace dense = all_variants({1, 7, 64});
+  dense.grids = {GridIndex::kDense};
+  VariantSpace hashed = dense;
+  hashed.grids = {GridIndex::kHashed};
+  hashed.schedules = {Schedule{ScheduleKind::kStatic, 0}, Schedule{ScheduleKind::kDynamic, 7}};
+  std::vector<Variant> variants = enumerate(dense);
+  for (const Variant& v : enumerate(hashed)) variants.push_back(v);
+  return variants;
+}
 
-// A few variants that between them cover every loop, order, stencil and precision (for the
-// expensive hard cases, where running all of them would cost time without covering more code).
+// A few variants that between them cover every loop, order, stencil and precision, on the
+// default (auto) grid index (for the expensive hard cases, where running all of them would cost
+// time without covering more code).
 inline std::vector<Variant> covering_variants() {
   VariantSpace space = all_variants({});
+  space.grids = {GridIndex::kAuto};
   space.schedules = {Schedule{ScheduleKind::kDynamic, 7}};
   return enumerate(space);
 }

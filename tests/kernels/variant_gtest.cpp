@@ -15,6 +15,8 @@ TEST(Variant, EnumerationCoversTheWholeSpace) {
   EXPECT_EQ(space.orders.size(), 3u);
   EXPECT_EQ(space.stencils.size(), 2u);
   EXPECT_EQ(space.precisions, (std::vector<Precision>{Precision::kDouble, Precision::kFloat}));
+  // Both indexes, explicitly (auto is one of them on every scene).
+  EXPECT_EQ(space.grids, (std::vector<GridIndex>{GridIndex::kDense, GridIndex::kHashed}));
   // static, then static,k dynamic,k guided,k for each k.
   ASSERT_EQ(space.schedules.size(), 10u);
   EXPECT_EQ(space.schedules[0], (Schedule{ScheduleKind::kStatic, 0}));
@@ -24,16 +26,18 @@ TEST(Variant, EnumerationCoversTheWholeSpace) {
                                               "dynamic,1", "dynamic,7", "dynamic,64", "guided,1",
                                               "guided,7", "guided,64"}));
   const auto variants = enumerate(space);
-  ASSERT_EQ(variants.size(), 2u * 3u * 2u * 10u * 2u);
+  ASSERT_EQ(variants.size(), 2u * 3u * 2u * 10u * 2u * 2u);
   std::set<std::string> names;
   for (const auto& v : variants) names.insert(to_string(v));
   EXPECT_EQ(names.size(), variants.size()) << "duplicates in the enumeration";
   EXPECT_TRUE(enumerate(VariantSpace{}).empty());
-  EXPECT_EQ(enumerate(all_variants({})).size(), 24u);  // only plain static
-  // A space left at its default precision enumerates double variants only.
+  EXPECT_EQ(enumerate(all_variants({})).size(), 48u);  // only plain static
+  // A space left at its default precision and grid enumerates double, auto variants only.
   VariantSpace doubles = space;
   doubles.precisions = VariantSpace{}.precisions;
+  doubles.grids = VariantSpace{}.grids;
   EXPECT_EQ(doubles.precisions, std::vector<Precision>{Precision::kDouble});
+  EXPECT_EQ(doubles.grids, std::vector<GridIndex>{GridIndex::kAuto});
   EXPECT_EQ(enumerate(doubles).size(), 120u);
 }
 
@@ -42,9 +46,10 @@ TEST(Variant, RoundTripForEveryEnumeratedVariant) {
     const std::string text = to_string(v);
     EXPECT_EQ(parse_variant(text), v) << text;
     EXPECT_EQ(to_string(parse_variant(text)), text);
-    // Canonical form: four parts, a fifth only for float.
+    // Canonical form: four parts, a fifth only for float, then the grid unless auto.
     const long parts = std::count(text.begin(), text.end(), '/') + 1;
-    EXPECT_EQ(parts, v.precision == Precision::kFloat ? 5 : 4) << text;
+    EXPECT_EQ(parts, (v.precision == Precision::kFloat ? 5 : 4) + (v.grid != GridIndex::kAuto))
+        << text;
   }
 }
 
@@ -96,6 +101,26 @@ TEST(Variant, PrecisionPart) {
   EXPECT_EQ(parse_precision("float"), Precision::kFloat);
   for (const char* text : {"", "single", "Float", "f32", "half"}) {
     EXPECT_THROW(parse_precision(text), InputError) << "'" << text << "'";
+  }
+}
+
+TEST(Variant, GridPart) {
+  EXPECT_EQ(Variant{}.grid, GridIndex::kAuto);
+  EXPECT_EQ(parse_variant("cell/sorted/half/dynamic,7").grid, GridIndex::kAuto);
+  EXPECT_EQ(parse_variant("cell/sorted/half/dynamic,7/grid=auto"),
+            parse_variant("cell/sorted/half/dynamic,7"));
+  const Variant hashed = parse_variant("cell/sorted/half/dynamic,7/float/grid=hashed");
+  EXPECT_EQ(hashed.grid, GridIndex::kHashed);
+  EXPECT_EQ(hashed.precision, Precision::kFloat);
+  EXPECT_EQ(to_string(hashed), "cell/sorted/half/dynamic,7/float/grid=hashed");
+  EXPECT_EQ(parse_variant("particle/morton/static/grid=dense").grid, GridIndex::kDense);
+  EXPECT_EQ(to_string(parse_variant("particle/morton/static/grid=dense")),
+            "particle/morton/full/static/grid=dense");
+  EXPECT_EQ(parse_grid_index("hashed"), GridIndex::kHashed);
+  EXPECT_EQ(to_string(GridIndex::kDense), "dense");
+  for (const char* text : {"particle/sorted/static/grid=sparse", "particle/sorted/static/grid=",
+                           "particle/sorted/static/grid=dense/grid=hashed"}) {
+    EXPECT_THROW(parse_variant(text), InputError) << text;
   }
 }
 
@@ -191,7 +216,7 @@ TEST(VariantAxes, TableDrivesHelpParsingAndPrinting) {
       EXPECT_NE(help.find(std::string(value)), std::string::npos) << axis.name << " " << value;
     }
   }
-  EXPECT_EQ(variant_axes().size(), 5u);
+  EXPECT_EQ(variant_axes().size(), 6u);
   EXPECT_EQ(parse_variant("particle/sorted/half/static,200/precision=float"),
             parse_variant("particle/sorted/half/static,200/float"));
   EXPECT_EQ(parse_variant("cell/morton/guided,4/precision=double"),

@@ -3,20 +3,30 @@
 
 #include <fmt/core.h>
 
+#include "methods/methods.hpp"
+
 namespace contactlab::tuner {
 
 void print_progress(const std::string& line) { fmt::print(stderr, "contactlab: {}\n", line); }
 
 Calibration machine_calibration(TuningCache& cache, const TuneOptions& options, int threads,
                                 bool recalibrate, const ProgressFn& progress) {
-  if (!recalibrate) {
-    if (auto cached = cache.calibration()) return *cached;
+  const auto cached = cache.calibration();
+  // A cached fit serves when it priced every structure asked for (e.g. not the grid=hashed ones
+  // of `tune --grids dense,hashed` after a default calibration).
+  bool covered = cached.has_value();
+  for (const Variant& structure : structures_of(options)) {
+    covered = covered && cached->structures.count(structure_key(structure)) > 0;
   }
+  if (!recalibrate && covered) return *cached;
   if (progress) {
     progress(fmt::format("calibrating the cost model on this machine (once; cached in {})...",
                          cache.path()));
   }
   Calibration calibration = calibrate_machine(options, threads);
+  if (cached && !recalibrate) {  // keep the structures fitted before and not asked for now
+    for (const auto& [key, costs] : cached->structures) calibration.structures.emplace(key, costs);
+  }
   cache.store_calibration(calibration);
   return calibration;
 }

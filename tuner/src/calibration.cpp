@@ -26,10 +26,13 @@ WorkView view_of(const LoopWork& work) { return {work.tests, work.homes, work.bu
 
 std::string structure_key(const Variant& variant) {
   // fmt rather than operator+: GCC 12 warns falsely (-Wrestrict) on the concatenation here.
+  // The grid index only when named (grid=auto keys, as before it existed, stay valid).
   return fmt::format(
-      "{}/{}/{}{}", to_string(variant.loop), to_string(variant.order), to_string(variant.stencil),
+      "{}/{}/{}{}{}", to_string(variant.loop), to_string(variant.order), to_string(variant.stencil),
       variant.precision != Precision::kDouble ? fmt::format("/{}", to_string(variant.precision))
-                                              : std::string());
+                                              : std::string(),
+      variant.grid != GridIndex::kAuto ? fmt::format("/grid={}", to_string(variant.grid))
+                                       : std::string());
 }
 
 Calibration calibrate_machine(const TuneOptions& options, int threads) {

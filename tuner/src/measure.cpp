@@ -68,7 +68,9 @@ RunRecord measure_detection(ContactDetector& detector, const Scene& scene,
   record.phases = {{"setup", a.setup_s}, {"detect", a.detect_s}};
   record.work_counts = {{"candidate_tests", last.candidate_tests},
                         {"contact_pairs", last.contact_pairs},
-                        {"max_cell_occupancy", last.max_cell_occupancy}};
+                        {"max_cell_occupancy", last.max_cell_occupancy},
+                        {"hashed_index", last.hashed_index ? 1u : 0u},
+                        {"cell_index_bytes", last.index_bytes}};
 
   const auto [lo, hi] = std::minmax_element(contact_counts.begin(), contact_counts.end());
   if (*lo != *hi) {

@@ -189,6 +189,11 @@ void prepare_decomposed(MPI_Comm comm, const SceneSource& source, const DetectOp
                        std::to_string(reach));
     }
     grid.emplace(box, width, CellNumbering::kLinear);
+    if (!grid->dense_fits()) {  // the partition's histogram has an entry per cell
+      throw InputError(
+          "--mpi decomposed: the partition grid has more than 2^28 cells (D or "
+          "--halo too small for the box)");
+    }
     histogram.dims = grid->dims();
     histogram.count.assign(grid->cell_count(), 0);
     for (const Particle& p : read) {

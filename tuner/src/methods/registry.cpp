@@ -22,8 +22,12 @@ Variant with_schedule(Variant structure, ScheduleKind kind, int chunk) {
 }
 
 std::vector<Variant> structures_of(const TuneOptions& options) {
-  return enumerate(VariantSpace{
-      options.loops, options.orders, options.stencils, {Schedule{}}, options.precisions});
+  return enumerate(VariantSpace{options.loops,
+                                options.orders,
+                                options.stencils,
+                                {Schedule{}},
+                                options.precisions,
+                                options.grids});
 }
 
 }  // namespace contactlab::tuner

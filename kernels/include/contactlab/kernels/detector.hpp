@@ -139,10 +139,13 @@ struct DetectRun {
   std::uint64_t contact_pairs = 0;
   std::uint32_t max_cell_occupancy = 0;
   std::array<int, 3> grid_dims{};
+  bool hashed_index = false;    // the cells were indexed by a hash table over the occupied ones
+  std::size_t index_bytes = 0;  // memory of the cell index (dense table, or hashed cells)
   int threads = 0;
 };
 
-// The work of each iteration of a detection loop, in loop order (one entry per iteration).
+// The work of each iteration of a detection loop, in loop order (one entry per iteration: per
+// particle, or per cell key with the dense index and per occupied cell with the hashed one).
 struct LoopWork {
   std::vector<std::uint32_t> tests;  // pair tests
   std::vector<std::uint32_t> homes;  // home particles visited: cell loop, the occupancy; else 1

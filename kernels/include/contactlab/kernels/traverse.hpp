@@ -26,6 +26,7 @@
 #include <type_traits>
 
 #include "contactlab/kernels/cell_grid.hpp"
+#include "contactlab/kernels/cell_index.hpp"
 #include "contactlab/kernels/detector.hpp"
 #include "contactlab/kernels/slot_range.hpp"
 #include "contactlab/kernels/variant.hpp"
@@ -76,16 +77,18 @@ struct NeighbourRanges {
     return candidates - (half ? s_h + 1 - ranges[own].begin : 1);
   }
 
-  void build(const CellGrid& grid, const CellRegistry& registry, const StencilRows& stencil,
+  // The ranges of the stencil around the home cell, found through the registration's cell
+  // index (cell_index.hpp: DenseCellIndex or HashedCellIndex).
+  template <class Index>
+  void build(const CellGrid& grid, const Index& index, const StencilRows& stencil,
              const std::array<int, 3>& home) {
     count = 0;
     candidates = 0;
     const auto& dims = grid.dims();
-    const std::uint32_t* begin_of = registry.cell_begin.data();
     const bool linear = grid.numbering() == CellNumbering::kLinear;
-    std::array<std::uint32_t, 3> x_part{};  // Morton: the x parts of the home's x - 1 .. x + 1
+    std::array<std::uint64_t, 3> x_part{};  // Morton: the x parts of the home's x - 1 .. x + 1
     if (!linear) {
-      for (int i = 0; i < 3; ++i) x_part[i] = CellGrid::morton_part(0, home[0] - 1 + i);
+      for (int i = 0; i < 3; ++i) x_part[i] = Index::morton_part(0, home[0] - 1 + i);
     }
     for (int r = 0; r < stencil.count; ++r) {
       const StencilRow& row = stencil.rows[r];
@@ -95,18 +98,18 @@ struct NeighbourRanges {
       const int x_hi = std::min(home[0] + row.dx_hi, dims[0] - 1);
       if (linear) {
         if (r == stencil.own) own = count;
-        const SlotRange range{begin_of[grid.key(x_lo, cy, cz)],
-                              begin_of[grid.key(x_hi, cy, cz) + 1]};
+        const SlotRange range =
+            index.key_range(r, index.key(grid, x_lo, cy, cz), index.key(grid, x_hi, cy, cz));
         if (range.begin == range.end) continue;  // never the own row: it holds the home
         ranges[count++] = range;
         candidates += range.end - range.begin;
         continue;
       }
       // Morton keys of a row are not consecutive: one range per cell.
-      const std::uint32_t yz_part = CellGrid::morton_part(1, cy) | CellGrid::morton_part(2, cz);
+      const std::uint64_t yz_part = Index::morton_part(1, cy) | Index::morton_part(2, cz);
       for (int cx = x_lo; cx <= x_hi; ++cx) {
-        const std::uint32_t key = x_part[cx - home[0] + 1] | yz_part;
-        const SlotRange range{begin_of[key], begin_of[key + 1]};
+        const std::uint64_t key = x_part[cx - home[0] + 1] | yz_part;
+        const SlotRange range = index.key_range(3 * r + cx - home[0] + 1, key, key);
         if (range.begin == range.end) continue;  // never the home cell
         if (r == stencil.own && cx == home[0]) own = count;
         ranges[count++] = range;
@@ -130,6 +133,7 @@ struct Coordinates {
 template <class T>
 struct SortedLayout : Coordinates<T> {
   using Real = T;
+  static constexpr bool kIdsAreSlots = true;
   const std::uint32_t* slot_particle;  // slot -> input row
   std::uint32_t particle_at(std::uint32_t slot) const { return slot; }
   std::uint32_t slot_of(std::uint32_t particle) const { return particle; }
@@ -140,6 +144,7 @@ struct SortedLayout : Coordinates<T> {
 template <class T>
 struct UnsortedLayout : Coordinates<T> {
   using Real = T;
+  static constexpr bool kIdsAreSlots = false;
   const std::uint32_t* slot_particle;
   const std::uint32_t* particle_slot;
   std::uint32_t particle_at(std::uint32_t slot) const { return slot_particle[slot]; }
@@ -161,7 +166,8 @@ struct Spec {
 struct Home {
   std::uint32_t particle;   // working id
   std::uint32_t slot;       // its slot in the cell lists
-  std::uint64_t iteration;  // of the parallel loop: the cell's key, or the particle
+  std::uint64_t iteration;  // of the parallel loop: the cell (its key with the dense index, its
+                            // place among the occupied cells with the hashed one), or the particle
   std::uint64_t tests;      // candidates it is tested against (the home itself excluded)
   bool built;               // whether the stencil's ranges were built for it
 };
@@ -210,11 +216,10 @@ inline void for_each_candidate(const Layout& layout, const NeighbourRanges& nb, 
   }
 }
 
-template <bool kHalf, class Layout, class Op>
-void traverse_with(const Spec& spec, const Layout& layout, Op& op) {
+template <bool kHalf, class Index, class Layout, class Op>
+void traverse_with(const Spec& spec, const Index& index, const Layout& layout, Op& op) {
   const CellGrid& grid = spec.grid;
-  const CellRegistry& registry = spec.registry;
-  const std::uint32_t n = static_cast<std::uint32_t>(registry.slot_particle.size());
+  const std::uint32_t n = static_cast<std::uint32_t>(spec.registry.slot_particle.size());
   const StencilRows stencil = make_stencil(spec.stencil);
   const bool all_owned = spec.homes.covers(n);
   NeighbourRanges nb;
@@ -224,11 +229,11 @@ void traverse_with(const Spec& spec, const Layout& layout, Op& op) {
     if constexpr (Op::kTestsPairs) for_each_candidate<kHalf>(layout, nb, h, s_h, sink);
     op.end_home(home, sink);
   };
-  // The loop iteration -> particle (or cell key) map is chosen outside the loop, so the
+  // The loop iteration -> particle (or cell) map is chosen outside the loop, so the
   // single-process loop carries no block arithmetic (most cell-loop iterations are empty).
   auto loops = [&](auto iteration_at) {
     if (spec.loop == LoopKind::kParticle) {
-      std::uint32_t cached_key = UINT32_MAX;  // ranges are reused while the cell stays the same
+      std::uint64_t cached_key = UINT64_MAX;  // ranges are reused while the cell stays the same
       // Only this process's iterations enter the loop, so its threads' schedule divides them.
       const std::uint64_t iterations = spec.blocks.size(n);
 #pragma omp for schedule(runtime) nowait
@@ -236,30 +241,30 @@ void traverse_with(const Spec& spec, const Layout& layout, Op& op) {
         const auto h = static_cast<std::uint32_t>(iteration_at(k));
         if (!all_owned && !spec.homes.contains(layout.input_of(h))) continue;
         const auto home = grid.coords_of(layout.cell_x[h], layout.cell_y[h], layout.cell_z[h]);
-        const std::uint32_t key = grid.key(home[0], home[1], home[2]);
+        const std::uint64_t key = index.key(grid, home[0], home[1], home[2]);
         const bool built = key != cached_key;
         if (built) {
-          nb.build(grid, registry, stencil, home);
+          nb.build(grid, index, stencil, home);
           cached_key = key;
         }
         visit(h, layout.slot_of(h), h, built);
       }
     } else {
-      const std::uint64_t iterations = spec.blocks.size(grid.key_count());
+      // One iteration per cell key (dense index) or per occupied cell (hashed index).
+      const std::uint64_t iterations = spec.blocks.size(index.cell_iterations());
 #pragma omp for schedule(runtime) nowait
       for (std::uint64_t k = 0; k < iterations; ++k) {
-        const std::uint64_t key = iteration_at(k);
-        const std::uint32_t begin = registry.cell_begin[key];
-        const std::uint32_t end = registry.cell_begin[key + 1];
-        if (begin == end) continue;
-        const std::uint32_t first = layout.particle_at(begin);
-        nb.build(grid, registry, stencil,
+        const std::uint64_t cell = iteration_at(k);
+        const SlotRange slots = index.iteration_slots(cell);
+        if (slots.begin == slots.end) continue;
+        const std::uint32_t first = layout.particle_at(slots.begin);
+        nb.build(grid, index, stencil,
                  grid.coords_of(layout.cell_x[first], layout.cell_y[first], layout.cell_z[first]));
         bool built = true;  // reported with the cell's first home
-        for (std::uint32_t s = begin; s < end; ++s) {
+        for (std::uint32_t s = slots.begin; s < slots.end; ++s) {
           const std::uint32_t h = layout.particle_at(s);
           if (!all_owned && !spec.homes.contains(layout.input_of(h))) continue;
-          visit(h, s, key, built);
+          visit(h, s, cell, built);
           built = false;
         }
       }
@@ -272,13 +277,28 @@ void traverse_with(const Spec& spec, const Layout& layout, Op& op) {
   }
 }
 
-// The traversal, with the stencil chosen at compile time.
+// The iterations of the cell loop: one per key of a dense registration, one per occupied cell
+// of a hashed one.
+inline std::uint64_t cell_iterations(const CellGrid& grid, const CellRegistry& registry) {
+  return registry.hashed ? registry.occupied.size() : grid.key_count();
+}
+
+// The traversal, with the stencil and the cell index chosen at compile time.
 template <class Layout, class Op>
 void traverse(const Spec& spec, const Layout& layout, Op& op) {
-  if (spec.stencil == Stencil::kHalf) {
-    traverse_with<true>(spec, layout, op);
+  auto with_index = [&](const auto& index) {
+    if (spec.stencil == Stencil::kHalf) {
+      traverse_with<true>(spec, index, layout, op);
+    } else {
+      traverse_with<false>(spec, index, layout, op);
+    }
+  };
+  if (spec.registry.hashed) {
+    // Homes come in key order in the cell loop and in the particle loop over sorted particles.
+    const bool in_key_order = spec.loop == LoopKind::kCell || Layout::kIdsAreSlots;
+    with_index(HashedCellIndex{&spec.registry.occupied, in_key_order});
   } else {
-    traverse_with<false>(spec, layout, op);
+    with_index(DenseCellIndex{spec.registry.cell_begin.data(), spec.grid.key_count()});
   }
 }
 

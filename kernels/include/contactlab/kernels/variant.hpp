@@ -7,7 +7,9 @@
 // "particle/sorted/full/static,200" (the three-part "loop/order/schedule" means the paper's
 // full stencil), then any other axis as a named part `name=value`, printed only when it is not
 // the default. Precision keeps its older bare form too: a fifth part "float" is
-// "precision=float", and float variants print that way.
+// "precision=float", and float variants print that way. The grid index prints as
+// "grid=dense" or "grid=hashed" ("grid=auto", the default, not at all), e.g.
+// "cell/sorted/full/static/grid=hashed".
 #pragma once
 
 #include <optional>
@@ -37,6 +39,13 @@ enum class ScheduleKind { kStatic, kDynamic, kGuided };
 // are tested again in double.
 enum class Precision { kDouble, kFloat };
 
+// How the detection finds a cell's particles (cell_index.hpp): a dense table with an entry per
+// cell (the paper's; memory and the cell loop's iterations grow with the grid, at most 2^28
+// keys), or a hash table over the occupied cells only (memory and iterations grow with N, for
+// grids far larger than the particle count). kAuto chooses per scene (use_hashed_index in
+// cell_grid.hpp); every choice gives the same contacts.
+enum class GridIndex { kAuto, kDense, kHashed };
+
 struct Schedule {
   ScheduleKind kind = ScheduleKind::kStatic;
   // Iterations per chunk. 0 only with static: plain block partition (one chunk per thread).
@@ -50,6 +59,7 @@ struct Variant {
   Stencil stencil = Stencil::kFull;
   Schedule schedule;
   Precision precision = Precision::kDouble;
+  GridIndex grid = GridIndex::kAuto;
   friend bool operator==(const Variant&, const Variant&) = default;
 };
 
@@ -58,6 +68,7 @@ std::string_view to_string(Order order);
 std::string_view to_string(Stencil stencil);
 std::string_view to_string(ScheduleKind kind);
 std::string_view to_string(Precision precision);
+std::string_view to_string(GridIndex index);
 std::string to_string(const Schedule& schedule);  // "static", "static,200", "dynamic,4"
 std::string to_string(const Variant& variant);    // four parts, a fifth only for float
 
@@ -66,6 +77,7 @@ LoopKind parse_loop(std::string_view text);
 Order parse_order(std::string_view text);
 Stencil parse_stencil(std::string_view text);
 Precision parse_precision(std::string_view text);
+GridIndex parse_grid_index(std::string_view text);
 Schedule parse_schedule(std::string_view text);  // "dynamic" alone means "dynamic,1"
 Variant parse_variant(std::string_view text);
 
@@ -105,6 +117,7 @@ struct VariantSpace {
   std::vector<Stencil> stencils;
   std::vector<Schedule> schedules;
   std::vector<Precision> precisions{Precision::kDouble};
+  std::vector<GridIndex> grids{GridIndex::kAuto};
 };
 
 // The product in the table's axis order, without the variants that break a rule.
@@ -113,8 +126,8 @@ std::vector<Variant> enumerate(const VariantSpace& space);
 // The five configurations of Takagi et al. (Tables 2-5 and 7; chunk 200 for Table 7).
 std::vector<Variant> paper_variants();
 
-// Every loop, order, stencil and precision with the schedules static, static,k, dynamic,k
-// and guided,k for each k in `chunks`.
+// Every loop, order, stencil, precision and grid index (dense and hashed; auto is one of them)
+// with the schedules static, static,k, dynamic,k and guided,k for each k in `chunks`.
 VariantSpace all_variants(const std::vector<int>& chunks);
 
 }  // namespace contactlab

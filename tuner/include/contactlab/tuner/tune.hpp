@@ -33,6 +33,9 @@ struct TuneOptions {
   // Single precision is screened on request (`tune --float`); its variants decide the pairs
   // within float rounding of touching in double, so they find the exact contacts too.
   std::vector<Precision> precisions{Precision::kDouble};
+  // The cell index: auto (the scene's rule, use_hashed_index) unless asked to screen dense and
+  // hashed, which runs each structure twice (dense only where the grid fits a dense table).
+  std::vector<GridIndex> grids{GridIndex::kAuto};
   // Wrong contact pairs a variant may have against the double-precision result and still be
   // chosen (the search checks every screened variant); 0 = exact only.
   std::uint64_t tolerance = 0;
