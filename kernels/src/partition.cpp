@@ -11,20 +11,6 @@
 #include "contactlab/kernels/error.hpp"
 
 namespace contactlab {
-namespace {
-
-// Inserts two zero bits between consecutive bits of a 21-bit value.
-std::uint64_t spread_bits(int v) {
-  std::uint64_t x = static_cast<std::uint64_t>(v) & 0x1fffffu;
-  x = (x | (x << 32)) & 0x1f00000000ffffull;
-  x = (x | (x << 16)) & 0x1f0000ff0000ffull;
-  x = (x | (x << 8)) & 0x100f00f00f00f00full;
-  x = (x | (x << 4)) & 0x10c30c30c30c30c3ull;
-  x = (x | (x << 2)) & 0x1249249249249249ull;
-  return x;
-}
-
-}  // namespace
 
 void add_to_histogram(const CellGrid& grid, const Scene& scene, CellHistogram& histogram) {
   if (grid.numbering() != CellNumbering::kLinear) {
@@ -61,7 +47,8 @@ std::uint64_t cell_work(const CellHistogram& histogram, int cx, int cy, int cz) 
 }
 
 std::uint64_t morton_key(int cx, int cy, int cz) {
-  return spread_bits(cx) | (spread_bits(cy) << 1) | (spread_bits(cz) << 2);
+  return CellGrid::wide_morton_part(0, cx) | CellGrid::wide_morton_part(1, cy) |
+         CellGrid::wide_morton_part(2, cz);
 }
 
 std::string_view to_string(PartitionMethod method) {
