@@ -1,0 +1,69 @@
+// The engine's state as a whole: its energy balance, and the restore from a checkpoint.
+#include <cmath>
+
+#include "contactlab/dem/engine.hpp"
+
+namespace contactlab::dem {
+
+Energies Engine::energies() const {
+  const Particles& p = particles_;
+  const PairCoefficients& c = coefficients_;
+  Energies e;
+  double elastic = 0.0;
+  for (std::size_t a = 0; a < p.size(); ++a) {
+    e.kinetic += 0.5 * p.mass[a] * (p.vx[a] * p.vx[a] + p.vy[a] * p.vy[a] + p.vz[a] * p.vz[a]);
+    e.kinetic +=
+        0.5 / p.inv_inertia[a] * (p.wx[a] * p.wx[a] + p.wy[a] * p.wy[a] + p.wz[a] * p.wz[a]);
+    e.potential -= p.mass[a] * (settings_.gravity[0] * p.x[a] + settings_.gravity[1] * p.y[a] +
+                                settings_.gravity[2] * p.z[a]);
+    for (std::size_t w = 0; w < settings_.walls.size(); ++w) {
+      Vec3 cp;
+      if (!closest_point(settings_.walls[w], time_s_, {p.x[a], p.y[a], p.z[a]}, cp)) continue;
+      const double delta = p.radius[a] - std::hypot(p.x[a] - cp[0], p.y[a] - cp[1], p.z[a] - cp[2]);
+      if (delta <= 0) continue;
+      const double kn = c.k_n(p.mass[a]);
+      const double h2 = p.wall_spring[3 * w][a] * p.wall_spring[3 * w][a] +
+                        p.wall_spring[3 * w + 1][a] * p.wall_spring[3 * w + 1][a] +
+                        p.wall_spring[3 * w + 2][a] * p.wall_spring[3 * w + 2][a];
+      elastic += 0.5 * kn * delta * delta + 0.5 * c.kt_ratio * kn * h2;
+    }
+  }
+  const PairList& q = pairs_;
+  for (std::size_t k = 0; k < q.size(); ++k) {
+    const std::uint32_t i = q.i[k], j = q.j[k];
+    const auto& sh = q.shift[q.image[k]];
+    const double delta =
+        p.radius[i] + p.radius[j] -
+        std::hypot(p.x[i] - p.x[j] - sh[0], p.y[i] - p.y[j] - sh[1], p.z[i] - p.z[j] - sh[2]);
+    if (delta <= 0) continue;
+    const double kn = c.k_n(p.mass[i] * p.mass[j] / (p.mass[i] + p.mass[j]));
+    const double h2 = q.hx[k] * q.hx[k] + q.hy[k] * q.hy[k] + q.hz[k] * q.hz[k];
+    elastic += 0.5 * kn * delta * delta + 0.5 * c.kt_ratio * kn * h2;
+  }
+  e.potential += elastic;
+  e.dissipated = initial_energy_ - (e.kinetic + e.potential);
+  return e;
+}
+
+void Engine::restore(const State& state, Particles particles, PairList pairs) {
+  time_s_ = state.time_s;
+  base_time_s_ = state.time_s;
+  base_step_ = state.step;
+  step_ = state.step;
+  rebuilds_ = state.rebuilds;
+  large_overlaps_ = state.large_overlaps;
+  initial_energy_ = state.initial_energy;
+  removed_count_ = state.removed_count;
+  removed_mass_ = state.removed_mass;
+  particles_ = std::move(particles);
+  const auto shift = pairs_.shift;
+  pairs_ = std::move(pairs);
+  pairs_.shift = shift;
+  pairs_.resize(pairs_.i.size(), coefficients_.mu_roll > 0);
+  pairs_.build_csr(particles_.size());
+  index_ids();
+  // (the next step predicts every velocity again before it computes forces)
+  refresh_kinematics(prediction_kick());
+}
+
+}  // namespace contactlab::dem
