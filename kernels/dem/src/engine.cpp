@@ -77,6 +77,32 @@ Engine::Engine(EngineSettings settings, Particles particles)
   initial_energy_ = e.kinetic + e.potential;
 }
 
+namespace {
+
+// Particle k's linear and angular accelerations from its last forces and torques.
+struct Accelerations {
+  double ax, ay, az, bx, by, bz;
+};
+Accelerations accelerations(const Particles& p, std::size_t k) {
+  return {p.fx[k] * p.inv_mass[k],    p.fy[k] * p.inv_mass[k],    p.fz[k] * p.inv_mass[k],
+          p.tx[k] * p.inv_inertia[k], p.ty[k] * p.inv_inertia[k], p.tz[k] * p.inv_inertia[k]};
+}
+
+// The velocities the forces see, v + a kick (synchronised: v(t + dt) ~ v(t + dt/2) + a(t) dt/2),
+// into k's kinematics block: step() and refresh_kinematics() both write them here, so a
+// reorder predicts exactly what the step did.
+void predict_velocities(const Particles& p, std::size_t k, const Accelerations& a, double kick,
+                        double* kin) {
+  kin[4] = p.vx[k] + a.ax * kick;
+  kin[5] = p.vy[k] + a.ay * kick;
+  kin[6] = p.vz[k] + a.az * kick;
+  kin[8] = p.wx[k] + a.bx * kick;
+  kin[9] = p.wy[k] + a.by * kick;
+  kin[10] = p.wz[k] + a.bz * kick;
+}
+
+}  // namespace
+
 double Engine::prediction_kick() const {
   return settings_.velocity_in_forces == VelocityInForces::kSynchronised ? 0.5 * settings_.dt_s
                                                                          : 0.0;
@@ -86,24 +112,13 @@ void Engine::refresh_kinematics(double kick) {
   const Particles& p = particles_;
   kin_.assign(kKinStride * p.size(), 0.0);
   for (std::size_t k = 0; k < p.size(); ++k) {
-    // The velocities the forces see, predicted as step() does (the same operations).
-    const double ax = p.fx[k] * p.inv_mass[k], ay = p.fy[k] * p.inv_mass[k],
-                 az = p.fz[k] * p.inv_mass[k];
-    const double bx = p.tx[k] * p.inv_inertia[k], by = p.ty[k] * p.inv_inertia[k],
-                 bz = p.tz[k] * p.inv_inertia[k];
     double* kin = &kin_[kKinStride * k];
-    const double v[11] = {p.x[k],
-                          p.y[k],
-                          p.z[k],
-                          p.radius[k],
-                          p.vx[k] + ax * kick,
-                          p.vy[k] + ay * kick,
-                          p.vz[k] + az * kick,
-                          p.mass[k],
-                          p.wx[k] + bx * kick,
-                          p.wy[k] + by * kick,
-                          p.wz[k] + bz * kick};
-    std::copy(v, v + 11, kin);
+    kin[0] = p.x[k];
+    kin[1] = p.y[k];
+    kin[2] = p.z[k];
+    kin[3] = p.radius[k];
+    kin[7] = p.mass[k];
+    predict_velocities(p, k, accelerations(p, k), kick, kin);
   }
   index_wall_reach();
 }
@@ -169,10 +184,8 @@ void Engine::step() {
     reduction(min                                                                                 \
               : bad)
   for (std::size_t k = 0; k < n; ++k) {
-    const double ax = p.fx[k] * p.inv_mass[k], ay = p.fy[k] * p.inv_mass[k],
-                 az = p.fz[k] * p.inv_mass[k];
-    const double bx = p.tx[k] * p.inv_inertia[k], by = p.ty[k] * p.inv_inertia[k],
-                 bz = p.tz[k] * p.inv_inertia[k];
+    const Accelerations a = accelerations(p, k);
+    const auto [ax, ay, az, bx, by, bz] = a;
     p.vx[k] += ax * half;
     p.vy[k] += ay * half;
     p.vz[k] += az * half;
@@ -183,18 +196,11 @@ void Engine::step() {
     p.x[k] += mx;
     p.y[k] += my;
     p.z[k] += mz;
-    // Synchronised: v(t + dt) ~ v(t + dt/2) + a(t) dt/2, kept only where the forces read it
-    // (refresh_kinematics predicts it again the same way after a reorder).
     double* kin = &kin_[kKinStride * k];
     kin[0] = p.x[k];
     kin[1] = p.y[k];
     kin[2] = p.z[k];
-    kin[4] = p.vx[k] + ax * kick;
-    kin[5] = p.vy[k] + ay * kick;
-    kin[6] = p.vz[k] + az * kick;
-    kin[8] = p.wx[k] + bx * kick;
-    kin[9] = p.wy[k] + by * kick;
-    kin[10] = p.wz[k] + bz * kick;
+    predict_velocities(p, k, a, kick, kin);
     const double ddx = p.x[k] - p.x0[k], ddy = p.y[k] - p.y0[k], ddz = p.z[k] - p.z0[k];
     max_disp_sq = std::max(max_disp_sq, ddx * ddx + ddy * ddy + ddz * ddz);
     const double step_sq = mx * mx + my * my + mz * mz;
