@@ -1,0 +1,48 @@
+"""The kernel benchmark (Google Benchmark's JSON, benchmark.json): T_ALL per variant and the
+speed targets of the foundation issue, as ratios within that one run."""
+from .common import SchemaError, load_json, reading, table
+
+
+def section(path, out):
+    out.append("\n## Kernel benchmark (Google Benchmark, N = 1,024,000, D = 1/200, clustered)\n")
+    if path is None:
+        out.append("Not run (no benchmark.json).")
+        return
+    b = load_json(path)
+    with reading(path):
+        if not isinstance(b.get("benchmarks"), list):
+            raise SchemaError("$.benchmarks: missing")
+        ctx = b.get("context", {})
+        out.append(f"{ctx.get('host_name', '?')}, {ctx.get('num_cpus', '?')} CPUs, {ctx.get('date', '?')}. "
+                   "Time = T_ALL per iteration (manual time, mean of the iterations; Google "
+                   "Benchmark gives no interval).\n")
+        rows, by_name = [], {}
+        for i, bm in enumerate(b["benchmarks"]):
+            if bm.get("run_type") == "aggregate":
+                continue
+            for key in ("name", "real_time", "T_s", "T_c", "tests_per_s", "contacts_per_s"):
+                if key not in bm:
+                    raise SchemaError(f"$.benchmarks[{i}].{key}: missing")
+            name = bm["name"].replace("detect/", "").replace("/manual_time", "")
+            by_name[name] = bm
+            rows.append([f"`{name}`", f"{bm['real_time']:.1f}", f"{1e3 * bm['T_s']:.1f}",
+                         f"{1e3 * bm['T_c']:.1f}", f"{bm['tests_per_s']:.3g}", f"{bm['contacts_per_s']:.3g}"])
+    out.extend(table(["benchmark", "T_ALL [ms]", "T_s [ms]", "T_c [ms]", "tests/s", "contacts/s"], rows))
+
+    def time_of(name):
+        bm = by_name.get(name)
+        return bm["real_time"] if bm else None
+
+    claims = []
+    u, s = time_of("particle/unsorted/full/static/threads:1"), time_of("particle/sorted/full/static/threads:1")
+    if u and s:
+        claims.append(f"reordering: particle/unsorted / particle/sorted T_ALL = **{u / s:.2f}x** (target >= 3x)")
+    h = time_of("particle/sorted/half/static/threads:1")
+    if s and h:
+        claims.append(f"half stencil: full / half T_ALL (sorted, static) = **{s / h:.2f}x** (target >= 1.4x)")
+    serial = by_name.get("particle/sorted/full/static/threads:1")
+    if serial:
+        claims.append(f"T_s of 1,024,000 particles, sorted, 1 thread = **{1e3 * serial['T_s']:.1f} ms** (target < 60 ms)")
+    if claims:
+        out.append("\nSpeed targets (ratios within this one benchmark run, 1 thread):\n")
+        out.extend(f"- {c}" for c in claims)
