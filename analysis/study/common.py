@@ -16,10 +16,10 @@ EMULATED = "†"
 PREDICTED = "§"
 SHORT_INTERVAL = "‡"  # fewer than 6 samples: the interval is [min, max] and cannot reach 95 %
 
-FOOTNOTE_EMULATED = (f"{EMULATED} emulated: not measured at this thread count; `contactlab emulate "
-                     "threads` replays the per-thread work measured on this machine at the thread "
-                     "counts it has, scheduled onto the requested threads (method in "
-                     "emulation-threads.json).")
+FOOTNOTE_EMULATED = (f"{EMULATED} emulated, not measured: `contactlab emulate threads` (and `dem "
+                     "profile --emulate`) replay the per-thread work measured on this machine at the "
+                     "thread counts it has, scheduled onto the requested threads (the method is in "
+                     "the file); at a measured thread count the emulated value is shown to validate it.")
 FOOTNOTE_PREDICTED = (f"{PREDICTED} predicted: a performance model's value (emulation-mpi.json, "
                       "tuning/*.json), not a measurement.")
 FOOTNOTE_SHORT = (f"{SHORT_INTERVAL} fewer than 6 repetitions: the interval is [min, max] and does "

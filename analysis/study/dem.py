@@ -86,7 +86,7 @@ def _speedup(p, otsuka, figures_dir, out):
             f"{hopper['amdahl_bound']}x ({hopper['best_speedup'] / hopper['amdahl_bound']:.0%} of it).")
     if e8 and p.bounds.get(hopper["threads"]):
         b = p.bounds[hopper["threads"]]
-        text += (f" Ours at {hopper['threads']} threads: {emulated(f'{e8.speedup:.2f}')}x against our "
+        text += (f" Ours at {hopper['threads']} threads: {emulated(f'{e8.speedup:.2f}x')} against our "
                  f"bound {b:.2f}x ({e8.speedup / b:.0%} of it).")
     out.append(text)
     for r in p.validation:

@@ -125,5 +125,5 @@ def _figures(model, mpi, figures_dir):
 def validation_rows(model):
     if model is None:
         return []
-    return [("MPI", f"{r.mode}, {r.ranks} ranks × {r.threads_per_rank} threads, T_c"
+    return [("MPI", f"{r.mode}, {r.ranks} rank(s) × {r.threads_per_rank} thread(s), T_c"
              + (" (**oversubscribed**)" if r.oversubscribed else ""), r) for r in model.validation]
