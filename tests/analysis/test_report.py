@@ -1,0 +1,217 @@
+#!/usr/bin/env python3
+"""analysis/report.py on the synthetic fixture (tests/analysis/fixture/synthetic-2c, hand-made
+numbers): the tables hold the fixture's medians and intervals, emulated and predicted values
+are marked, validation errors are computed from the two values, the figures exist, and a
+malformed file stops the report with one line naming the file and the JSON path.
+
+Run: /usr/bin/python3 tests/analysis/test_report.py   (CTest: analysis_report, label analysis).
+Exits 77 (CTest's SKIP_RETURN_CODE) when this Python has no matplotlib."""
+import importlib.util
+import json
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+import unittest
+
+SKIP = 77
+ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
+REPORT = os.path.join(ROOT, "analysis", "report.py")
+FIXTURE = os.path.join(ROOT, "tests", "analysis", "fixture", "synthetic-2c")
+
+
+def run_report(directory):
+    return subprocess.run([sys.executable, REPORT, directory], capture_output=True, text=True, timeout=300)
+
+
+class ReportOnFixture(unittest.TestCase):
+    """One report of the whole fixture, read by every test of this class."""
+
+    @classmethod
+    def setUpClass(cls):
+        cls.temporary = tempfile.mkdtemp(prefix="contactlab-report-")
+        cls.results = os.path.join(cls.temporary, "synthetic-2c")
+        shutil.copytree(FIXTURE, cls.results)
+        # Pictures beside the machine folder, as results/dem/pit/hopper-small holds them; the
+        # captions give the times, out of name order on purpose.
+        pit = os.path.join(cls.temporary, "dem", "pit", "hopper-small")
+        os.makedirs(pit)
+        for name in ("b_section.png", "a_section.png"):
+            with open(os.path.join(pit, name), "wb") as f:
+                f.write(b"\x89PNG\r\n\x1a\n")  # only linked, never read
+        with open(os.path.join(pit, "pictures.json"), "w") as f:
+            json.dump({"pictures": {"a_section.png": "t = 2.50 s: the crater", "b_section.png": "t = 0.70 s: the channel"}}, f)
+        cls.process = run_report(cls.results)
+        path = os.path.join(cls.results, "report.md")
+        cls.report = open(path, encoding="utf-8").read() if os.path.exists(path) else ""
+
+    @classmethod
+    def tearDownClass(cls):
+        shutil.rmtree(cls.temporary)
+
+    def section(self, title, until="\n## "):
+        """The report from `title` to the next `until` (the next section by default)."""
+        start = self.report.index(title)
+        end = self.report.find(until, start + 1)
+        return self.report[start:end if end >= 0 else None]
+
+    def row(self, text, first_cells):
+        """The table row of `text` that starts with these cells."""
+        prefix = "| " + " | ".join(first_cells) + " |"
+        rows = [line for line in text.splitlines() if line.startswith(prefix)]
+        self.assertEqual(len(rows), 1, f"one row starting {prefix!r} in:\n{text}")
+        return [c.strip() for c in rows[0].strip("|").split("|")]
+
+    def test_succeeds(self):
+        self.assertEqual(self.process.returncode, 0, self.process.stderr)
+
+    def test_header_names_machine_and_commit(self):
+        self.assertIn("**Machine:** Synthetic CPU, 2 cores", self.report)
+        self.assertIn("`0123456789`", self.report)  # 10 characters of the commit
+        self.assertNotIn("0123456789a", self.report)
+
+    def test_measured_cells_hold_median_and_interval(self):
+        table4 = self.section("**Table 4**", until="**Table 5**")
+        self.assertIn("ours T_ALL [95 %]", table4)
+        self.assertIn("ours speedup [95 %]", table4)
+        # samples 0.50..0.56: median 0.53, interval [min, max] (7 samples reach 95 %)
+        self.assertEqual(self.row(table4, ["1", "2.005"])[3], "0.53 [0.5, 0.56]")
+        # speed-up at 2: 0.53 / 0.30, conservatively [0.50 / 0.33, 0.56 / 0.27]
+        self.assertEqual(self.row(table4, ["2", "0.971"])[4], "1.77 [1.52, 2.07]")
+
+    def test_emulated_cells_are_italic_with_marker_and_validated(self):
+        table4 = self.section("**Table 4**", until="**Table 5**")
+        row4 = self.row(table4, ["4", "0.583"])
+        self.assertEqual(row4[3], "*0.15*†")
+        self.assertEqual(row4[4], "*3.53*†")  # the file's speed-up 0.53 / 0.15
+        row2 = self.row(table4, ["2", "0.971"])
+        self.assertEqual(row2[5], "*0.318*†")
+        self.assertEqual(row2[6], "+6.0%")  # (0.318 - 0.30) / 0.30
+        self.assertIn("† emulated, not measured", table4 + self.section("## Tables 2"))
+
+    def test_headline_marks_sixteen_threads_emulated(self):
+        headline = self.section("## Headline")
+        self.assertEqual(self.row(headline, ["16", "0.124"])[3:], ["*0.0375*†", "*14.40*†"])
+        self.assertEqual(self.row(headline, ["2", "0.958"])[3], "0.28 [0.25, 0.31]")
+        self.assertIn("`dynamic,4096`", headline)
+
+    def test_validation_errors_computed_from_values(self):
+        validation = self.section("## Validation")
+        t_c = self.row(validation, ["threads", "`particle/sorted/full/static`, 2 threads, T_c"])
+        self.assertEqual(t_c[2:], ["0.25", "*0.2*†", "-20.0%", "**no**"])
+        dem = self.row(validation, ["DEM", "hopper-small, 2 threads, step"])
+        self.assertEqual(dem[4:], ["+8.0%", "yes"])
+        mpi = [line for line in validation.splitlines() if line.startswith("| MPI |") and "4 rank" in line]
+        self.assertEqual(len(mpi), 1)
+        self.assertIn("oversubscribed", mpi[0])
+        self.assertIn("+25.0%", mpi[0])
+
+    def test_mpi_table_is_predicted(self):
+        mpi = self.section("## Figs. 9–10")
+        row = self.row(mpi, ["1024", "pure MPI 682x, hybrid 833x"])
+        self.assertTrue(all(c.startswith("*") and c.endswith("*§") for c in row[2:]), row)
+        self.assertIn("§ predicted", mpi)
+        self.assertIn("**oversubscribed**", mpi)
+
+    def test_mpi_legends_say_predicted(self):
+        sys.path.insert(0, os.path.join(ROOT, "analysis"))
+        from study import inputs, mpi
+        legends = []
+
+        def capture(fig, figures_dir, name):
+            legends.extend(t.get_text() for t in fig.axes[0].get_legend().get_texts())
+            return name
+
+        model = inputs.mpi_model(os.path.join(FIXTURE, "emulation-mpi.json"))
+        original, mpi.save_figure = mpi.save_figure, capture
+        try:
+            with open(os.path.join(ROOT, "analysis", "data", "takagi2013.json")) as f:
+                mpi._figures(model, json.load(f)["mpi"], self.temporary)
+        finally:
+            mpi.save_figure = original
+        series = [text for text in legends if not text.startswith(("paper", "ideal"))]
+        self.assertEqual(len(series), 2 * len(model.series))
+        self.assertTrue(all(text.endswith("predicted (model)") for text in series), series)
+
+    def test_chunk_study_claims_only_separated_intervals(self):
+        chunk = self.section("## The open problem", until="## Otsuka")
+        self.assertIn("Really slower (no overlap): k = 1.", chunk)
+        self.assertIn("not a real difference (intervals overlap)", chunk)
+        self.assertIn("*1024*†", chunk)  # emulated best chunk at 4 threads
+
+    def test_dem_section(self):
+        dem = self.section("## Otsuka")
+        self.assertEqual(self.row(dem, ["contact force"])[1:3], ["80%", "80.0%"])
+        self.assertEqual(self.row(dem, ["2", "0.0055 [0.0054, 0.0057]"])[2], "1.82 [1.72, 1.89]")
+        self.assertEqual(self.row(dem, ["8", "*0.0021*†"])[2], "*4.76*†")
+        # the pictures in time order, linked relative to the report
+        crater, channel = dem.index("(../dem/pit/hopper-small/a_section.png)"), dem.index("b_section.png")
+        self.assertLess(channel, crater)
+
+    def test_figures_exist(self):
+        for name in ("fig8_speedup.png", "fig9_mpi_speedup.png", "fig10_mpi_efficiency.png",
+                     "chunk_study.png", "dem_speedup.png"):
+            path = os.path.join(self.results, "figures", name)
+            self.assertTrue(os.path.getsize(path) > 1000, path)
+            self.assertIn(f"(figures/{name})", self.report)
+        self.assertFalse([n for n in os.listdir(os.path.join(self.results, "figures")) if n.endswith(".tmp")])
+
+
+class ReportOnDamagedInput(unittest.TestCase):
+    def setUp(self):
+        self.temporary = tempfile.mkdtemp(prefix="contactlab-report-")
+        self.results = os.path.join(self.temporary, "m")
+        shutil.copytree(FIXTURE, self.results)
+
+    def tearDown(self):
+        shutil.rmtree(self.temporary)
+
+    def edit(self, name, change):
+        path = os.path.join(self.results, name)
+        with open(path) as f:
+            document = json.load(f)
+        change(document)
+        with open(path, "w") as f:
+            json.dump(document, f)
+
+    def assert_fails_naming(self, *words):
+        process = run_report(self.results)
+        self.assertEqual(process.returncode, 1, process.stdout + process.stderr)
+        lines = process.stderr.strip().splitlines()
+        self.assertEqual(len(lines), 1, process.stderr)
+        for word in words:
+            self.assertIn(word, lines[0])
+        self.assertFalse(os.path.exists(os.path.join(self.results, "report.md")))
+
+    def test_missing_field_names_file_and_path(self):
+        self.edit("emulation-threads.json", lambda d: d["variants"][0]["emulated"][2].pop("total_s"))
+        self.assert_fails_naming("emulation-threads.json", "$.variants[0].emulated[2].total_s")
+
+    def test_missing_aggregate_names_run(self):
+        self.edit("paper-tables.json", lambda d: d["runs"][1]["aggregates"]["total_s"].pop("median"))
+        self.assert_fails_naming("paper-tables.json", "$.runs[1].aggregates.total_s.median")
+
+    def test_wrong_kind(self):
+        self.edit("dem-profile.json", lambda d: d.update(kind="something-else"))
+        self.assert_fails_naming("dem-profile.json", "$.kind")
+
+    def test_not_json(self):
+        with open(os.path.join(self.results, "emulation-mpi.json"), "w") as f:
+            f.write("{ not json")
+        self.assert_fails_naming("emulation-mpi.json", "not JSON")
+
+    def test_missing_optional_input_says_not_run(self):
+        os.remove(os.path.join(self.results, "emulation-mpi.json"))
+        process = run_report(self.results)
+        self.assertEqual(process.returncode, 0, process.stderr)
+        with open(os.path.join(self.results, "report.md")) as f:
+            report = f.read()
+        self.assertIn("Not run (no emulation-mpi.json).", report)
+
+
+if __name__ == "__main__":
+    if importlib.util.find_spec("matplotlib") is None:
+        print(f"skipped: {sys.executable} has no matplotlib (Debian: apt-get install python3-matplotlib)")
+        sys.exit(SKIP)
+    unittest.main()
