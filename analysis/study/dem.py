@@ -111,9 +111,13 @@ def _figure(p, figures_dir):
         points = sorted(p.bounds.items())
         ax.plot([t for t, _ in points], [b for _, b in points], "--", color="tab:red",
                 label=f"Amdahl bound, serial fraction {p.serial_fraction:.3f}")
-    top = max(list(p.emulated) + list(p.measured))
+    top = int(max(list(p.emulated) + list(p.measured)))
     ax.plot([1, top], [1, top], "-", color="grey", lw=0.8, label="ideal")
-    ax.set_xscale("log", base=2)
+    ax.set_xscale("log", base=2)  # log-log, as Fig. 8: the ideal line is straight
+    ax.set_yscale("log", base=2)
+    ticks = [2 ** k for k in range(top.bit_length()) if 2 ** k <= top]
+    ax.set_xticks(ticks, [str(t) for t in ticks])
+    ax.set_yticks(ticks, [str(t) for t in ticks])
     ax.set_xlabel("threads")
     ax.set_ylabel("speed-up over 1 thread (step time)")
     ax.set_title(f"DEM step speed-up, {p.config} ({p.particles} particles)")
