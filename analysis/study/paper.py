@@ -2,9 +2,9 @@
 theirs: measured where this machine has the threads, emulated (marked) where it has not."""
 from types import SimpleNamespace
 
-from .common import (EMULATED, Interval, cell, context_line, emulated, load_results, num, percent,
-                     plt, ratio_interval, reading, relative_error, runs_by_variant_threads,
-                     save_figure, speedup_cell, summary, table)
+from .common import (EMULATED, Interval, cell, context_line, emulated, items, load_results, need,
+                     num, number, ok_runs, percent, plt, ratio_interval, reading, relative_error,
+                     runs_by_variant_threads, save_figure, speedup_cell, summary, table)
 
 FLAT = 1.5  # a gain below this from 2 to 8 threads (ideal 4x) is what we call flattening
 
@@ -151,18 +151,20 @@ def table6_section(path, paper, out):
                "callgrind's simulation of an FX10-like cache (**simulated, an approximation**: "
                "32 KiB 2-way L1D, 12 MiB L2, 128-byte lines), detection loop only.\n")
     with reading(path):
-        runs = {r["parameters"]["variant"]: r for r in document["runs"] if r["status"] == "ok"}
+        runs = {r["parameters"]["variant"]: (path, r) for path, r in ok_runs(document)}
         rows = []
         for row in paper["table6_miss_rates_percent"]:
-            run = runs.get(row["variant"])
+            path, run = runs.get(row["variant"], (None, None))
             cells = ["–", "–", "–"]
             if run:
-                counted = [c for c in run["counters"] if c.get("available")]
+                counters = items(run, path, "counters")
+                counted = [(p, c) for p, c in counters if need(c, p, "available")]
                 if counted:
-                    c = counted[0]
-                    cells = [f"{c['l1_miss_percent']:.3f}", f"{c['l2_miss_percent']:.3f}", c["source"]]
+                    p, c = counted[0]
+                    cells = [f"{number(c, p, 'l1_miss_percent'):.3f}", f"{number(c, p, 'l2_miss_percent'):.3f}",
+                             need(c, p, "source")]
                 else:
-                    cells = ["–", "–", "; ".join(f"{c['source']}: unavailable" for c in run["counters"])]
+                    cells = ["–", "–", "; ".join(f"{need(c, p, 'source')}: unavailable" for p, c in counters)]
             rows.append([f"`{row['variant']}`", row["l1"], row["l2"]] + cells)
     out.extend(table(["variant", "paper L1", "paper L2", "ours L1", "ours L2", "source"], rows))
 

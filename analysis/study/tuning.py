@@ -21,17 +21,32 @@ def load(tuning_dir):
                 raise SchemaError("$.schema_version: expected 1")
             need(t, "$", "scene", "kind")
             for i, m in enumerate(need(t, "$", "methods")):
-                for key in ("method", "variant", "tuning_cost_s"):
+                for key in ("method", "variant"):
                     need(m, f"$.methods[{i}]", key)
+                number(m, f"$.methods[{i}]", "tuning_cost_s")
+                _check_regrets(m, f"$.methods[{i}]")
             for i, c in enumerate(need(t, "$", "classic")):
                 for key in ("name", "inputs", "chunk"):
                     need(c, f"$.classic[{i}]", key)
+                _check_regrets(c, f"$.classic[{i}]")
             for i, p in enumerate(t.get("predictions", [])):
                 number(p, f"$.predictions[{i}]", "threads")
                 number(p, f"$.predictions[{i}]", "predicted_s")
                 need(p, f"$.predictions[{i}]", "variant")
         documents[name[:-5]] = t
     return documents
+
+
+def _check_regrets(entry, path):
+    """The optional measured median and regrets of a method or formula, where present."""
+    if "measured" in entry:
+        number(entry, path, "measured", "median_s")
+    if "regret" in entry:
+        number(entry, path, "regret")
+        number(entry, path, "regret_ci95", 1)
+    if "vs_exhaustive" in entry:
+        number(entry, path, "vs_exhaustive", "ratio_minus_one")
+        number(entry, path, "vs_exhaustive", "ci95", 1)
 
 
 def _relative(entry, key, interval_key):
