@@ -44,10 +44,13 @@ Subcommand add_variants_command(CLI::App& app);
 Subcommand add_sweep_command(CLI::App& app, const std::string& command_line);
 Subcommand add_tune_command(CLI::App& app, const std::string& command_line);
 Subcommand add_partition_command(CLI::App& app);
+Subcommand add_emulate_command(CLI::App& app, const std::string& command_line);
 Subcommand add_demo_command(CLI::App& app);
-Subcommand add_dem_command(CLI::App& app);
+Subcommand add_dem_command(CLI::App& app, const std::string& command_line);
 // `dem variants` and `dem profile`, under the dem command (dem_study_command.cpp).
-std::vector<Subcommand> add_dem_study_commands(CLI::App& dem_app);
+std::vector<Subcommand> add_dem_study_commands(CLI::App& dem_app, const std::string& command_line);
+// `dem profile`, under the dem command (dem_profile_command.cpp).
+Subcommand add_dem_profile_command(CLI::App& dem_app, const std::string& command_line);
 
 // `tune --dem CONFIG`: every force variant timed on the config's scene at `threads`, the
 // fastest chosen, the default's and the report's regret printed (dem_study_command.cpp).

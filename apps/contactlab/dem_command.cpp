@@ -364,7 +364,7 @@ struct DemTimestepCommand {
 
 }  // namespace
 
-Subcommand add_dem_command(CLI::App& app) {
+Subcommand add_dem_command(CLI::App& app, const std::string& command_line) {
   CLI::App* sub = app.add_subcommand("dem", "DEM: run a config, validate the engine, study dt");
   sub->require_subcommand(1);
   auto run = std::make_shared<DemRunCommand>();
@@ -402,7 +402,7 @@ Subcommand add_dem_command(CLI::App& app) {
   validate_app->add_option("--case", validate->only_, "run only this case");
   validate_app->add_option("--variant", validate->variant_, "run the cases on this force variant");
   validate_app->add_option("--threads", validate->threads_, "threads of every case (default 1)");
-  const std::vector<Subcommand> studies = add_dem_study_commands(*sub);
+  const std::vector<Subcommand> studies = add_dem_study_commands(*sub, command_line);
   auto timestep = std::make_shared<DemTimestepCommand>();
   CLI::App* timestep_app =
       sub->add_subcommand("timestep", "stable limit, recommended dt, speed against error");

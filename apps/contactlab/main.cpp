@@ -41,8 +41,9 @@ int main(int argc, char** argv) {
                                                  cli::add_sweep_command(app, command_line),
                                                  cli::add_tune_command(app, command_line),
                                                  cli::add_partition_command(app),
+                                                 cli::add_emulate_command(app, command_line),
                                                  cli::add_demo_command(app),
-                                                 cli::add_dem_command(app)};
+                                                 cli::add_dem_command(app, command_line)};
 
   try {
     app.parse(argc, argv);

@@ -45,6 +45,7 @@ nlohmann::json to_json(const PartitionReport& report, PartitionMethod method) {
                      {"work", load.work},
                      {"particles", load.particles},
                      {"halo_particles", load.halo_particles},
+                     {"halo_sources", load.halo_sources},
                      {"cells", load.cells}});
   }
   return {{"method", std::string(to_string(method))},

@@ -175,6 +175,8 @@ PartitionReport evaluate_partition(const CellHistogram& histogram, const Partiti
   const auto& dims = histogram.dims;
   std::vector<std::uint64_t> owned_here;  // particles of the cell per rank of its owner range
   std::vector<std::pair<int, int>> ranges;
+  // Per rank, the ranks it receives ghosts from.
+  std::vector<std::vector<int>> sources(partition.ranks());
   // Pass 0: particles and work; pass 1: halos (of ranks that own particles).
   for (int pass = 0; pass < 2; ++pass) {
     for (int cz = 0; cz < dims[2]; ++cz) {
@@ -221,6 +223,13 @@ PartitionReport evaluate_partition(const CellHistogram& histogram, const Partiti
               const std::uint64_t mine = q >= first && q <= last ? owned_here[q - first] : 0;
               report.ranks[q].halo_particles += count - mine;
               report.total_halo += count - mine;
+              for (int r = first; r <= last; ++r) {
+                // Kept unique as it grows: a rank has few sources but many shared cells.
+                if (r != q && owned_here[r - first] > 0 &&
+                    std::find(sources[q].begin(), sources[q].end(), r) == sources[q].end()) {
+                  sources[q].push_back(r);
+                }
+              }
             }
             next = std::max(next, b + 1);
           }
@@ -228,6 +237,7 @@ PartitionReport evaluate_partition(const CellHistogram& histogram, const Partiti
       }
     }
   }
+  for (std::size_t r = 0; r < sources.size(); ++r) report.ranks[r].halo_sources = sources[r].size();
   std::vector<std::uint64_t> work, particles;
   for (const auto& load : report.ranks) {
     work.push_back(load.work);

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <sstream>
 
 #include "program_test_support.hpp"
@@ -217,6 +218,43 @@ TEST(DemCli, ProfilePrintsPhasesSerialFractionAndAmdahl) {
   const auto bad = run_command(contactlab_exe() + " dem profile " + config_path() + " --threads 2");
   EXPECT_EQ(bad.exit_code, 2) << bad.output;
   EXPECT_NE(bad.output.find("must start with 1"), std::string::npos) << bad.output;
+}
+
+// dem profile --json with --emulate: measured rounds with intervals, the emulated thread counts
+// (the measured ones included, 1 the anchor), and the check at the measured 2 threads.
+TEST(DemCli, ProfileJsonHasMeasuredEmulatedAndTheCheck) {
+  TempDir dir;
+  const std::string out = dir.file("profile.json");
+  const auto r = run_command(contactlab_exe() + " dem profile " + config_path() +
+                             " --steps 10 --threads 1,2 --rounds 3 --emulate 4,8 --json " + out);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const nlohmann::json doc = nlohmann::json::parse(slurp(out));
+  EXPECT_EQ(doc["kind"], "contactlab-dem-profile");
+  EXPECT_EQ(doc["rounds"], 3);
+  ASSERT_EQ(doc["measured"].size(), 2u);
+  for (const auto& m : doc["measured"]) {
+    EXPECT_LE(m["step_s"]["low"].get<double>(), m["step_s"]["median"].get<double>());
+    EXPECT_LE(m["step_s"]["median"].get<double>(), m["step_s"]["high"].get<double>());
+    EXPECT_EQ(m["step_s"]["repetitions"], 3);
+  }
+  std::vector<int> emulated;
+  for (const auto& e : doc["emulated"]) emulated.push_back(e["threads"].get<int>());
+  EXPECT_EQ(emulated, (std::vector<int>{1, 2, 4, 8}));
+  EXPECT_DOUBLE_EQ(doc["emulated"][0]["speedup"].get<double>(), 1.0);
+  ASSERT_EQ(doc["validation"].size(), 1u);
+  const auto& check = doc["validation"][0];
+  EXPECT_EQ(check["threads"], 2);
+  EXPECT_NEAR(check["relative_error"].get<double>(),
+              check["emulated_step_s"].get<double>() / check["measured_step_s"].get<double>() - 1,
+              1e-12);
+  for (const char* phase : {"candidates_s", "pair_forces_s", "update_s", "integration_s"}) {
+    EXPECT_TRUE(doc["phase_split"].contains(phase)) << phase;
+  }
+  const auto bad =
+      run_command(contactlab_exe() + " dem profile " + config_path() + " --rounds 0 --json " + out);
+  EXPECT_EQ(bad.exit_code, 2) << bad.output;
+  EXPECT_NE(bad.output.find("--rounds"), std::string::npos) << bad.output;
+  EXPECT_EQ(nlohmann::json::parse(slurp(out))["rounds"], 3);  // the earlier file is kept
 }
 
 // tune --dem: the model (calibrated, then every candidate priced), the search over its best

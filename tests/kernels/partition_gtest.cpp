@@ -132,8 +132,26 @@ TEST(Partition, MoreRanksThanParticlesLeavesEmptyRanks) {
   for (const auto& load : report.ranks) (load.particles == 0 ? empty : busy)++;
   EXPECT_EQ(busy, 3);
   EXPECT_EQ(empty, 3);
-  // Each particle's rank holds the two others as ghosts.
-  for (const auto& load : report.ranks) EXPECT_EQ(load.halo_particles, load.particles ? 2u : 0u);
+  // Each particle's rank holds the two others as ghosts, from the two other ranks.
+  for (const auto& load : report.ranks) {
+    EXPECT_EQ(load.halo_particles, load.particles ? 2u : 0u);
+    EXPECT_EQ(load.halo_sources, load.particles ? 2u : 0u);
+  }
+}
+
+// A row of six cells in three stretches of two: the middle rank receives ghosts from both ends
+// (two messages), the ends from the middle only.
+TEST(Partition, HaloSourcesAreTheRanksNextDoor) {
+  CellHistogram histogram;
+  histogram.dims = {6, 1, 1};
+  histogram.count = {1, 1, 1, 1, 1, 1};
+  const Partition partition(histogram, 3, PartitionMethod::kVolume);
+  const PartitionReport report = evaluate_partition(histogram, partition);
+  ASSERT_EQ(report.ranks.size(), 3u);
+  EXPECT_EQ(report.ranks[0].halo_sources, 1u);
+  EXPECT_EQ(report.ranks[1].halo_sources, 2u);
+  EXPECT_EQ(report.ranks[2].halo_sources, 1u);
+  EXPECT_EQ(report.ranks[1].halo_particles, 2u);
 }
 
 // A dense cell with more work than a rank's share is shared by several ranks.

@@ -107,6 +107,8 @@ struct RankLoad {
   std::uint64_t particles = 0;
   std::uint64_t halo_particles = 0;
   std::uint64_t cells = 0;  // occupied cells it owns particles of
+  // Ranks its ghosts come from: the messages of its halo exchange (one per source rank).
+  std::uint64_t halo_sources = 0;
 };
 
 struct PartitionReport {

@@ -1,0 +1,361 @@
+// `contactlab emulate threads|mpi`: what detection would take on more threads or processes than
+// this machine has (docs/emulation.md), every value labelled emulated or predicted, and checked
+// against what this machine measures (threads up to its cores; `detect --mpi` result files).
+#include <fmt/core.h>
+#include <fmt/ranges.h>
+#include <omp.h>
+
+#include <algorithm>
+#include <memory>
+#include <nlohmann/json.hpp>
+
+#include "cli_shared.hpp"
+#include "contactlab/kernels/atomic_file.hpp"
+#include "contactlab/kernels/error.hpp"
+#include "contactlab/kernels/partition.hpp"
+#include "contactlab/tuner/auto_variant.hpp"
+#include "contactlab/tuner/context.hpp"
+#include "contactlab/tuner/measured_kernel.hpp"
+#include "contactlab/tuner/thread_emulation.hpp"
+#include "contactlab/tuner_model/emulation.hpp"
+
+namespace contactlab::cli {
+namespace {
+
+namespace tn = contactlab::tuner;
+
+std::vector<int> int_list(const std::string& text, const char* option) {
+  std::vector<int> values;
+  for (const std::string& item : split_list(text)) {
+    std::size_t used = 0;
+    int value = 0;
+    try {
+      value = std::stoi(item, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (used != item.size() || value < 1) {
+      throw InputError(fmt::format("{}: '{}' is not a whole number >= 1", option, item));
+    }
+    values.push_back(value);
+  }
+  return values;
+}
+
+void write_json(const std::string& path, const nlohmann::json& doc) {
+  write_file_atomically(path, [&](std::ostream& out) { out << doc.dump(2) << '\n'; });
+  fmt::print("wrote {}\n", path);
+}
+
+struct EmulateThreadsCommand {
+  SceneOptions scene_;
+  std::string variants_ =
+      "particle/unsorted/full/static,cell/unsorted/full/static,particle/sorted/full/static,"
+      "cell/sorted/full/static,particle/sorted/full/static,200";
+  std::string threads_ = "1,2,4,8,16";
+  std::string measured_;  // default: 1 .. the machine's cores
+  std::string chunk_threads_ = "2,4,8,16";
+  int rounds_ = 7;
+  std::string json_out_;
+  std::string cache_file_;
+  bool recalibrate_ = false;
+  std::string command_line_;
+
+  int run() const {
+    scene_.require_diameter();
+    if (!json_out_.empty()) check_writable(json_out_);
+    tn::ThreadEmulationOptions options;
+    // Variants are separated by ';' or by ',' before a loop name (a schedule has commas).
+    std::string text = variants_;
+    for (const char* loop : {",particle/", ",cell/"}) {
+      for (std::size_t at = text.find(loop); at != std::string::npos; at = text.find(loop, at)) {
+        text[at] = ';';
+      }
+    }
+    std::size_t start = 0;
+    while (start <= text.size()) {
+      const std::size_t end = std::min(text.find(';', start), text.size());
+      const std::string item = text.substr(start, end - start);
+      if (item.empty()) throw InputError("--variants: an empty item");
+      options.variants.push_back(parse_variant(item));
+      start = end + 1;
+    }
+    options.threads = int_list(threads_, "--threads");
+    options.chunk_threads = int_list(chunk_threads_, "--chunk-threads");
+    if (measured_.empty()) {
+      options.measured_threads = {1};
+      if (omp_get_num_procs() > 1) options.measured_threads.push_back(omp_get_num_procs());
+    } else {
+      options.measured_threads = int_list(measured_, "--measured-threads");
+    }
+    options.rounds = rounds_;
+    tn::validate(options);
+    auto [scene, record] = scene_.load();
+    tn::TuningCache cache(cache_file_.empty() ? tn::TuningCache::default_path() : cache_file_);
+    const tn::Calibration calibration = tn::machine_calibration(
+        cache, tn::structures_for(options.variants),
+        *std::max_element(options.measured_threads.begin(), options.measured_threads.end()),
+        recalibrate_);
+    const tn::ThreadEmulation emulation =
+        tn::emulate_threads(scene, scene_.diameter_, options, calibration);
+    fmt::print("emulate threads: N {}, D {}; measured at {} thread(s), {} rounds\n", scene.size(),
+               scene_.diameter_, fmt::join(options.measured_threads, ","), options.rounds);
+    for (const tn::VariantEmulation& e : emulation.variants) {
+      fmt::print("\n{}  (anchor scale {:.3f})\n  {:>7} {:>12} {:>12} {:>9}  source\n",
+                 to_string(e.variant), e.anchor_scale, "threads", "T_ALL [s]", "T_c [s]",
+                 "speedup");
+      for (const tn::EmulatedThreads& p : e.emulated) {
+        fmt::print("  {:>7} {:>12.5f} {:>12.5f} {:>9.2f}  emulated\n", p.threads, p.total_s(),
+                   p.detect_s, p.speedup);
+      }
+      for (const tn::EmulationCheck& c : e.checks) {
+        fmt::print(
+            "  check at {} threads: T_ALL measured {:.5f} emulated {:.5f} ({:+.1f}%), T_c "
+            "measured {:.5f} emulated {:.5f} ({:+.1f}%)\n",
+            c.threads, c.measured_total_s, c.emulated_total_s,
+            100.0 * tn::relative_error(c.emulated_total_s, c.measured_total_s), c.measured_detect_s,
+            c.emulated_detect_s,
+            100.0 * tn::relative_error(c.emulated_detect_s, c.measured_detect_s));
+      }
+    }
+    for (const tn::EmulatedChunkStudy& s : emulation.chunk_study) {
+      fmt::print("chunk study (emulated) {} threads {}: best k = {} ({:.5f} s), block {:.5f} s\n",
+                 s.threads, to_string(s.variant.schedule.kind), s.best_chunk, s.best_detect_s,
+                 s.block_detect_s);
+    }
+    if (!json_out_.empty()) {
+      write_json(json_out_, tn::emulation_document(emulation, options,
+                                                   tn::collect_context(command_line_, 1), record));
+    }
+    return 0;
+  }
+};
+
+// Detection times of `detect --mpi replicated --json` result files: ranks, threads per rank, T_c.
+struct MeasuredMpiRun {
+  int ranks = 1, threads = 1;
+  double detect_s = 0.0;
+};
+
+MeasuredMpiRun read_mpi_run(const std::string& path) {
+  const tn::ResultFile file = tn::read_result_file(path);
+  if (file.runs.empty() || !file.runs.front().aggregates) {
+    throw InputError(fmt::format("{}: no successful run", path));
+  }
+  const tn::RunRecord& run = file.runs.front();
+  if (!run.mpi) throw InputError(fmt::format("{}: not a detect --mpi result file", path));
+  return {file.context.mpi_ranks, run.parameters.threads, run.aggregates->detect_s.median};
+}
+
+struct EmulateMpiCommand {
+  SceneOptions scene_;
+  std::string variant_ = "particle/sorted/full/static,200";
+  std::string processes_ = "1,2,4,8,16,32,64,128,256,512,1024";
+  int threads_per_rank_ = 16;
+  std::uint32_t block_ = 200;
+  double latency_s_ = 1.5e-6;
+  double bandwidth_ = 5.0e9;
+  std::string network_source_ =
+      "Tofu interconnect of the FX10 as commonly cited (about 1.5 us MPI latency, 5 GB/s per "
+      "link and direction); not measured here";
+  std::vector<std::string> measured_;
+  int rounds_ = 5;
+  std::string json_out_;
+  std::string cache_file_;
+  bool recalibrate_ = false;
+  std::string command_line_;
+
+  int run() const;
+};
+
+int EmulateMpiCommand::run() const {
+  scene_.require_diameter();
+  if (!json_out_.empty()) check_writable(json_out_);
+  if (threads_per_rank_ < 1) throw InputError("--threads-per-rank must be >= 1");
+  if (block_ < 1) throw InputError("--block must be >= 1");
+  if (!(latency_s_ >= 0.0) || !(bandwidth_ > 0.0)) {
+    throw InputError("--latency must be >= 0 and --bandwidth > 0");
+  }
+  const std::vector<int> processes = int_list(processes_, "--processes");
+  std::vector<MeasuredMpiRun> measured;
+  for (const std::string& path : measured_) measured.push_back(read_mpi_run(path));
+  const Variant variant = parse_variant(variant_);
+  auto [scene, record] = scene_.load();
+  const double diameter = scene_.diameter_;
+
+  // The anchor: the variant's loop at one thread on this scene, timed here.
+  tn::DetectionKernel kernel(scene, diameter);
+  kernel.run(variant, 1);
+  const double one_thread_s = tn::median(kernel.samples(variant, 1, rounds_));
+  tn::TuningCache cache(cache_file_.empty() ? tn::TuningCache::default_path() : cache_file_);
+  const tn::Calibration calibration = tn::machine_calibration(cache, tn::structures_for({variant}),
+                                                              omp_get_num_procs(), recalibrate_);
+  const auto found = calibration.structures.find(tn::structure_key(variant));
+  const tn::MachineCosts costs =
+      found != calibration.structures.end() ? found->second.costs : tn::MachineCosts{};
+  const LoopWork work = kernel.iteration_work(variant, 1);
+  const tn::WorkView view{work.tests, work.homes, work.builds};
+  const tn::PreparedWork prepared(view);
+  const tn::AnchoredLoop loop(prepared, costs, variant.schedule, one_thread_s);
+  const tn::CommunicationModel network{latency_s_, bandwidth_, network_source_};
+
+  // The decomposition's per-rank work and halo, for each rank count.
+  const double reach = scene.has_diameters() ? scene.max_diameter() : diameter;
+  const CellGrid grid(scene.box, reach, CellNumbering::kLinear);
+  CellHistogram histogram;
+  add_to_histogram(grid, scene, histogram);
+  // A ghost travels as its coordinates, diameter and input row: four doubles and an index.
+  constexpr double kBytesPerGhost = 4 * sizeof(double) + sizeof(std::uint64_t);
+
+  struct Series {
+    std::string mode, label;
+    int threads_per_rank;
+    std::vector<tn::MpiPrediction> points;
+  };
+  std::vector<Series> series{{"replicated", "pure MPI", 1, {}},
+                             {"replicated",
+                              fmt::format("hybrid ({} threads per rank)", threads_per_rank_),
+                              threads_per_rank_,
+                              {}},
+                             {"decomposed", "distributed memory (pure MPI)", 1, {}}};
+  for (const int p : processes) {
+    series[0].points.push_back(
+        tn::predict_replicated(view, costs, loop.scale(), block_, p, 1, variant.schedule, network));
+    // Hybrid: ranks of threads_per_rank threads; below one full rank, one rank of p threads.
+    const int threads = std::min(p, threads_per_rank_);
+    series[1].points.push_back(tn::predict_replicated(view, costs, loop.scale(), block_,
+                                                      std::max(1, p / threads_per_rank_), threads,
+                                                      variant.schedule, network));
+    const Partition partition(histogram, p, PartitionMethod::kWork);
+    const PartitionReport report = evaluate_partition(histogram, partition);
+    std::vector<tn::DecomposedRank> ranks;
+    for (const RankLoad& load : report.ranks) {
+      ranks.push_back({load.work, load.halo_particles, load.halo_sources});
+    }
+    series[2].points.push_back(tn::predict_decomposed(ranks, report.total_work, one_thread_s, 1,
+                                                      1.0, kBytesPerGhost, network));
+  }
+
+  fmt::print(
+      "emulate mpi: N {}, D {}, {}; one-thread T_c {:.5f} s (median of {}), network {} s "
+      "+ bytes / {:.3g} B/s\n",
+      scene.size(), diameter, to_string(variant), one_thread_s, rounds_, latency_s_, bandwidth_);
+  nlohmann::json series_json = nlohmann::json::array();
+  for (const Series& s : series) {
+    fmt::print("\n{} (predicted)\n  {:>9} {:>6} {:>12} {:>12} {:>9} {:>10}\n", s.label, "processes",
+               "ranks", "T_c [s]", "comm [s]", "speedup", "efficiency");
+    const double base = s.points.front().detect_s();
+    nlohmann::json points = nlohmann::json::array();
+    for (std::size_t i = 0; i < s.points.size(); ++i) {
+      const tn::MpiPrediction& m = s.points[i];
+      const double speedup = base / m.detect_s();
+      const int procs = processes[i];
+      fmt::print("  {:>9} {:>6} {:>12.6f} {:>12.3g} {:>9.1f} {:>10.3f}\n", procs, m.ranks,
+                 m.detect_s(), m.communication_s, speedup, speedup / procs);
+      points.push_back({{"processes", procs},
+                        {"ranks", m.ranks},
+                        {"threads_per_rank", m.threads_per_rank},
+                        {"compute_s", m.compute_s},
+                        {"communication_s", m.communication_s},
+                        {"detect_s", m.detect_s()},
+                        {"rank_imbalance", m.rank_imbalance},
+                        {"speedup", speedup},
+                        {"efficiency", speedup / procs}});
+    }
+    series_json.push_back({{"mode", s.mode},
+                           {"threads_per_rank", s.threads_per_rank},
+                           {"label", s.label},
+                           {"points", points}});
+  }
+  nlohmann::json validation = nlohmann::json::array();
+  for (const MeasuredMpiRun& m : measured) {
+    const tn::MpiPrediction p = tn::predict_replicated(view, costs, loop.scale(), block_, m.ranks,
+                                                       m.threads, variant.schedule, network);
+    const bool oversubscribed = m.ranks * m.threads > omp_get_num_procs();
+    fmt::print("check: {} ranks x {} threads: measured {:.5f} s, predicted {:.5f} s ({:+.1f}%){}\n",
+               m.ranks, m.threads, m.detect_s, p.detect_s(),
+               100.0 * tn::relative_error(p.detect_s(), m.detect_s),
+               oversubscribed ? " (oversubscribed)" : "");
+    validation.push_back({{"mode", "replicated"},
+                          {"ranks", m.ranks},
+                          {"threads_per_rank", m.threads},
+                          {"measured_detect_s", m.detect_s},
+                          {"predicted_detect_s", p.detect_s()},
+                          {"relative_error", tn::relative_error(p.detect_s(), m.detect_s)},
+                          {"oversubscribed", oversubscribed}});
+  }
+  if (!json_out_.empty()) {
+    nlohmann::json doc{
+        {"schema_version", 1},
+        {"kind", "contactlab-mpi-model"},
+        {"label", "predicted"},
+        {"context", tn::collect_context(command_line_, 1)},
+        {"scene", record},
+        {"variant", to_string(variant)},
+        {"block", block_},
+        {"one_thread_detect_s", one_thread_s},
+        {"model",
+         {{"latency_s", latency_s_},
+          {"bandwidth_bytes_per_s", bandwidth_},
+          {"source", network_source_},
+          {"compute",
+           "replicated: each rank's blocks (block-cyclic) replayed under the variant's schedule "
+           "with its threads, priced by the calibrated machine costs scaled to this scene's "
+           "measured one-thread T_c, plus one reduction of the contact counts; decomposed: each "
+           "rank's candidate work (partition.hpp, work split) as its share of the one-thread "
+           "T_c, after an all-to-all of counts and its halo (one message per source rank, "
+           "40 bytes per ghost). Not modelled: the network's contention and topology, the "
+           "node's memory bandwidth shared by its ranks"}}},
+        {"series", series_json},
+        {"validation", validation}};
+    write_json(json_out_, doc);
+  }
+  return 0;
+}
+
+}  // namespace
+
+Subcommand add_emulate_command(CLI::App& app, const std::string& command_line) {
+  CLI::App* sub = app.add_subcommand(
+      "emulate", "more threads or processes than this machine has: emulated, checked here");
+  sub->require_subcommand(1);
+  auto threads = std::make_shared<EmulateThreadsCommand>();
+  threads->command_line_ = command_line;
+  CLI::App* t = sub->add_subcommand(
+      "threads", "detection variants at thread counts beyond the cores (trace replay)");
+  threads->scene_.add_to(*t, true);
+  t->add_option("--variants", threads->variants_,
+                "variants, comma-separated (default: the paper's five)");
+  t->add_option("--threads", threads->threads_, "thread counts to emulate (1,2,4,8,16)");
+  t->add_option("--measured-threads", threads->measured_,
+                "thread counts timed here, from 1 (default 1 and the cores)");
+  t->add_option("--chunk-threads", threads->chunk_threads_,
+                "thread counts of the emulated chunk study (2,4,8,16)");
+  t->add_option("--rounds", threads->rounds_, "interleaved rounds of timed runs (7)");
+  t->add_option("--json", threads->json_out_, "write the emulation (docs/emulation.md)");
+  t->add_option("--cache", threads->cache_file_, "tuning cache holding the machine's calibration");
+  t->add_flag("--recalibrate", threads->recalibrate_, "fit the machine's cost model again");
+
+  auto mpi = std::make_shared<EmulateMpiCommand>();
+  mpi->command_line_ = command_line;
+  CLI::App* m = sub->add_subcommand(
+      "mpi", "detection over 1..1024 MPI processes: each rank's work and a network model");
+  mpi->scene_.add_to(*m, true);
+  m->add_option("--variant", mpi->variant_, "variant (particle/sorted/full/static,200)");
+  m->add_option("--processes", mpi->processes_, "process counts (1,2,4,...,1024)");
+  m->add_option("--threads-per-rank", mpi->threads_per_rank_, "hybrid: threads per rank (16)");
+  m->add_option("--block", mpi->block_, "replicated: block of the block-cyclic deal (200)");
+  m->add_option("--latency", mpi->latency_s_, "network latency per message [s] (1.5e-6)");
+  m->add_option("--bandwidth", mpi->bandwidth_, "network bandwidth [bytes/s] (5e9)");
+  m->add_option("--network-source", mpi->network_source_, "where the network figures come from");
+  m->add_option("--measured", mpi->measured_,
+                "detect --mpi replicated --json result files to check the model against")
+      ->delimiter(',');
+  m->add_option("--rounds", mpi->rounds_, "timed one-thread runs of the anchor (5)");
+  m->add_option("--json", mpi->json_out_, "write the prediction (docs/emulation.md)");
+  m->add_option("--cache", mpi->cache_file_, "tuning cache holding the machine's calibration");
+  m->add_flag("--recalibrate", mpi->recalibrate_, "fit the machine's cost model again");
+  return {sub, [=] { return (*t) ? threads->run() : mpi->run(); }};
+}
+
+}  // namespace contactlab::cli

@@ -1,0 +1,126 @@
+// contactlab emulate end to end: the thread emulation's document (measured with intervals,
+// emulated, the anchor, the checks, the chunk study), the MPI model's series checked against a
+// measured `detect --mpi` run, and bad input as one line with nothing written.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "program_test_support.hpp"
+
+namespace contactlab::test {
+namespace {
+
+using nlohmann::json;
+
+// The tune tests' cache (fixture tune_calibration): its calibration covers the sorted
+// particle and cell loops, so these tests time only their own scene.
+std::string with_cache() {
+  return std::string("CONTACTLAB_CACHE_DIR=") + CONTACTLAB_TUNE_CACHE_DIR + " ";
+}
+
+const char* kScene = " --scene clustered --n 20000 -D 0.02 --seed 3";
+
+TEST(EmulateCli, ThreadsWritesMeasuredEmulatedChecksAndChunks) {
+  TempDir dir;
+  const std::string out = dir.file("threads.json");
+  const auto r = run_command(with_cache() + contactlab_exe() + " emulate threads" + kScene +
+                             " --variants particle/sorted/full/static,cell/sorted/full/static"
+                             " --threads 1,2,4,16 --measured-threads 1,2 --rounds 3"
+                             " --chunk-threads 4 --json " +
+                             out);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const json doc = json::parse(slurp(out));
+  EXPECT_EQ(doc["kind"], "contactlab-thread-emulation");
+  EXPECT_EQ(doc["label"], "emulated");
+  EXPECT_EQ(doc["scene"]["n"], 20000);
+  ASSERT_EQ(doc["variants"].size(), 2u);
+  for (const auto& v : doc["variants"]) {
+    ASSERT_EQ(v["measured"].size(), 2u);
+    for (const auto& m : v["measured"]) {
+      EXPECT_LE(m["total_s"]["low"].get<double>(), m["total_s"]["median"].get<double>());
+      EXPECT_LE(m["total_s"]["median"].get<double>(), m["total_s"]["high"].get<double>());
+    }
+    ASSERT_EQ(v["emulated"].size(), 4u);
+    // One thread is the anchor: the emulated T_c is the measured median.
+    EXPECT_NEAR(v["emulated"][0]["detect_s"].get<double>(),
+                v["measured"][0]["detect_s"]["median"].get<double>(), 1e-12);
+    EXPECT_DOUBLE_EQ(v["emulated"][0]["speedup"].get<double>(), 1.0);
+    EXPECT_EQ(v["emulated"][3]["threads"], 16);
+    ASSERT_EQ(v["validation"].size(), 1u);
+    const auto& c = v["validation"][0];
+    EXPECT_EQ(c["threads"], 2);
+    EXPECT_NEAR(c["detect_relative_error"].get<double>(),
+                c["emulated_detect_s"].get<double>() / c["measured_detect_s"].get<double>() - 1,
+                1e-12);
+  }
+  ASSERT_EQ(doc["chunk_study"].size(), 2u);  // dynamic and static at 4 threads
+  for (const auto& s : doc["chunk_study"]) {
+    EXPECT_EQ(s["threads"], 4);
+    EXPECT_EQ(s["variant"].get<std::string>().substr(0, 20), "particle/sorted/full");
+    double best = 1e300;
+    for (const auto& p : s["points"]) best = std::min(best, p["detect_s"].get<double>());
+    EXPECT_DOUBLE_EQ(s["best_detect_s"].get<double>(), best);
+  }
+}
+
+TEST(EmulateCli, MpiPredictsEverySeriesAndChecksAMeasuredRun) {
+  TempDir dir;
+  const std::string measured = dir.file("detect.json"), out = dir.file("mpi.json");
+  const auto detect = run_command(contactlab_exe() + " detect" + kScene +
+                                  " --variant particle/sorted/full/static,200 --threads 1"
+                                  " --mpi replicated --json " +
+                                  measured);
+  if (detect.exit_code == 2 && detect.output.find("built without MPI") != std::string::npos) {
+    GTEST_SKIP() << "this contactlab was built without MPI: no measured run to check against";
+  }
+  ASSERT_EQ(detect.exit_code, 0) << detect.output;
+  const auto r = run_command(with_cache() + contactlab_exe() + " emulate mpi" + kScene +
+                             " --processes 1,2,16,64 --threads-per-rank 16 --rounds 3"
+                             " --measured " +
+                             measured + " --json " + out);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const json doc = json::parse(slurp(out));
+  EXPECT_EQ(doc["kind"], "contactlab-mpi-model");
+  EXPECT_EQ(doc["label"], "predicted");
+  ASSERT_EQ(doc["series"].size(), 3u);
+  for (const auto& s : doc["series"]) {
+    ASSERT_EQ(s["points"].size(), 4u);
+    EXPECT_DOUBLE_EQ(s["points"][0]["speedup"].get<double>(), 1.0);
+    for (const auto& p : s["points"]) {
+      EXPECT_NEAR(p["efficiency"].get<double>(),
+                  p["speedup"].get<double>() / p["processes"].get<double>(), 1e-12);
+      EXPECT_NEAR(p["detect_s"].get<double>(),
+                  p["compute_s"].get<double>() + p["communication_s"].get<double>(), 1e-15);
+    }
+  }
+  EXPECT_EQ(doc["series"][1]["points"][3]["ranks"], 4);  // 64 processes: 4 ranks of 16
+  ASSERT_EQ(doc["validation"].size(), 1u);
+  EXPECT_EQ(doc["validation"][0]["ranks"], 1);
+  EXPECT_FALSE(doc["validation"][0]["oversubscribed"].get<bool>());
+}
+
+TEST(EmulateCli, BadInputIsOneLineAndKeepsTheOutput) {
+  TempDir dir;
+  const std::string out = dir.file("kept.json");
+  std::ofstream(out) << "{\"kept\": true}\n";
+  const std::pair<const char*, const char*> cases[] = {
+      {" emulate threads --measured-threads 2,4", "must start with 1"},
+      {" emulate threads --threads 0,2", "--threads: '0'"},
+      {" emulate threads --variants particle/sorted/ful/static", "ful"},
+      {" emulate mpi --measured /nonexistent/d.json", "/nonexistent/d.json"},
+      {" emulate mpi --block 0", "--block"},
+  };
+  for (const auto& [arguments, message] : cases) {
+    const auto r =
+        run_command(with_cache() + contactlab_exe() + arguments + kScene + " --json " + out);
+    EXPECT_EQ(r.exit_code, 2) << arguments << "\n" << r.output;
+    EXPECT_NE(r.output.find(message), std::string::npos) << arguments << "\n" << r.output;
+    EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << r.output;
+    EXPECT_EQ(slurp(out), "{\"kept\": true}\n");
+  }
+}
+
+}  // namespace
+}  // namespace contactlab::test

@@ -1,0 +1,89 @@
+// `contactlab emulate threads`: detection at thread counts this machine does not have, by
+// replaying each variant's trace under its schedule (tuner_model/emulation.hpp), with the
+// emulation checked against what this machine can measure. Every value it returns for a thread
+// count is labelled: measured (timed here) or emulated.
+#pragma once
+
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "contactlab/kernels/scene.hpp"
+#include "contactlab/kernels/variant.hpp"
+#include "contactlab/tuner/tune.hpp"
+#include "contactlab/tuner_model/statistics.hpp"
+
+namespace contactlab::tuner {
+
+struct ThreadEmulationOptions {
+  std::vector<Variant> variants;
+  std::vector<int> threads{1, 2, 4, 8, 16};  // emulated
+  std::vector<int> measured_threads{1, 2};   // timed here (1 first: the anchor)
+  int rounds = 7;                            // interleaved rounds of timed runs
+  // The chunk study: the best chunk of each kind at these thread counts, for the first
+  // particle/sorted/full variant's structure (the paper's Table 7 loop).
+  std::vector<int> chunk_threads{2, 4, 8, 16};
+  std::vector<int> chunk_grid = log2_chunk_grid(4096);
+};
+
+struct MeasuredThreads {
+  int threads = 1;
+  Summary setup_s, detect_s, total_s;
+};
+
+struct EmulatedThreads {
+  int threads = 1;
+  double setup_s = 0.0, detect_s = 0.0, speedup = 0.0, imbalance = 0.0;
+  double total_s() const { return setup_s + detect_s; }
+};
+
+struct EmulationCheck {
+  int threads = 2;
+  double measured_total_s = 0.0, emulated_total_s = 0.0;
+  double measured_detect_s = 0.0, emulated_detect_s = 0.0;
+};
+
+struct VariantEmulation {
+  Variant variant;
+  double anchor_scale = 1.0;  // AnchoredLoop::scale of its loop
+  std::vector<MeasuredThreads> measured;
+  std::vector<EmulatedThreads> emulated;
+  std::vector<EmulationCheck> checks;  // at each measured thread count above 1
+};
+
+struct EmulatedChunkStudy {
+  int threads = 1;
+  Variant variant;                               // with the study's kind and a placeholder chunk
+  std::vector<std::pair<int, double>> detect_s;  // (chunk, emulated T_c)
+  int best_chunk = 0;
+  double best_detect_s = 0.0;
+  double block_detect_s = 0.0;  // static block of the same structure
+};
+
+struct ThreadEmulation {
+  std::vector<VariantEmulation> variants;
+  std::vector<EmulatedChunkStudy> chunk_study;
+  Calibration calibration;
+};
+
+// Throws InputError for no variants, measured threads not starting with 1, a thread count < 1
+// or rounds < 1 (before anything is timed or calibrated).
+void validate(const ThreadEmulationOptions& options);
+
+// The structures (loops, orders, stencils, precisions) the variants need calibrated: pass to
+// machine_calibration (auto_variant.hpp) with the largest measured thread count.
+TuneOptions structures_for(const std::vector<Variant>& variants);
+
+// Times every variant at options.measured_threads in `rounds` interleaved rounds (one warm-up
+// run each first) and emulates options.threads with the machine costs of `calibration` (fitted
+// on the small calibration scenes, never on this one). Validates the options first.
+ThreadEmulation emulate_threads(const Scene& scene, double diameter,
+                                const ThreadEmulationOptions& options,
+                                const Calibration& calibration);
+
+// The document `emulate threads --json` writes (docs/emulation.md).
+nlohmann::json emulation_document(const ThreadEmulation& emulation,
+                                  const ThreadEmulationOptions& options, const Context& context,
+                                  const SceneRecord& scene);
+
+}  // namespace contactlab::tuner

@@ -1,0 +1,122 @@
+// Emulating machines larger than this one, from what this one can measure: more threads than it
+// has cores (a trace replayed under each schedule) and more MPI processes than it can run (each
+// rank's exact work plus a stated communication model). Pure functions: the callers time the
+// kernels (thread_emulation.hpp) and label every value these return "emulated" or "predicted".
+//
+// The trace of a detection loop is its exact work per iteration (ContactDetector::
+// iteration_work) priced by the calibrated machine costs (schedule_model.hpp), scaled so that
+// its one-thread replay equals the loop's measured one-thread time: the scene's own memory
+// behaviour at one thread is in the anchor, the schedule's balance and overheads in the replay.
+// What no replay holds: memory bandwidth and shared caches filling as threads are added (so an
+// emulated speed-up beyond the cores is what the schedule allows, an upper bound on a machine
+// whose memory keeps up) and caches that become large enough when the work is split (the
+// paper's superlinear 16.17x at 16 threads).
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "contactlab/kernels/variant.hpp"
+#include "contactlab/tuner_model/schedule_model.hpp"
+
+namespace contactlab::tuner {
+
+// A phase made of a serial part and a part that divides over threads: t(P) = serial + parallel/P.
+struct AmdahlPhase {
+  double serial_s = 0.0;
+  double parallel_s = 0.0;
+  double at(int threads) const;  // throws std::invalid_argument for threads < 1
+  // From the phase's times at 1 and at P > 1 threads (the two points determine both parts;
+  // each part is clamped at 0, so a time that does not fall is all serial and one that falls
+  // faster than 1/P all parallel). Throws std::invalid_argument for p <= 1 or a time <= 0.
+  static AmdahlPhase fit(double one_thread_s, int p, double p_threads_s);
+  // Only a one-thread time known: all of it serial (the conservative choice).
+  static AmdahlPhase serial(double one_thread_s) { return {one_thread_s, 0.0}; }
+};
+
+// A loop's trace anchored to its measured one-thread time.
+class AnchoredLoop {
+ public:
+  // Throws std::invalid_argument for one_thread_s <= 0 or an invalid schedule.
+  AnchoredLoop(const PreparedWork& work, const MachineCosts& costs, const Schedule& schedule,
+               double one_thread_s);
+  // measured one-thread time / the replay's one-thread time: how far the calibration scenes'
+  // costs are from this scene's at one thread.
+  double scale() const { return scale_; }
+  // The loop's emulated time at `threads` under `schedule` (another chunk or kind of the same
+  // loop may be asked for: the anchor is the loop's, not the schedule's).
+  ScheduleOutcome replay(int threads, const Schedule& schedule) const;
+  double seconds(int threads, const Schedule& schedule) const;
+
+ private:
+  const PreparedWork& work_;
+  MachineCosts costs_;
+  double scale_ = 1.0;
+};
+
+// (emulated - measured) / measured.
+double relative_error(double emulated, double measured);
+
+// ---- MPI processes ---------------------------------------------------------------------------
+
+// Messages on the interconnect: a message of b bytes takes latency + b / bandwidth (Hockney's
+// model); a collective over R ranks takes ceil(log2 R) such rounds (a binomial tree).
+struct CommunicationModel {
+  double latency_s = 1.5e-6;
+  double bandwidth_bytes_per_s = 5.0e9;
+  std::string source;
+  double message_s(double bytes) const;
+  double collective_s(int ranks, double bytes) const;  // 0 for one rank
+};
+
+// The iterations one rank of the paper's replicated detection runs: blocks of `block`
+// consecutive iterations dealt round-robin over `ranks` (HomeBlocks), in loop order. The first
+// iteration of each block builds its neighbour ranges afresh (the rank's previous iteration is
+// elsewhere in the order).
+struct RankWork {
+  std::vector<std::uint32_t> tests, homes;
+  std::vector<std::uint8_t> builds;
+  WorkView view() const { return {tests, homes, builds}; }
+};
+// Throws std::invalid_argument for block < 1, ranks < 1 or rank outside [0, ranks).
+RankWork replicated_rank_work(WorkView work, std::uint32_t block, int ranks, int rank);
+
+struct MpiPrediction {
+  int ranks = 1;
+  int threads_per_rank = 1;
+  int processes() const { return ranks * threads_per_rank; }
+  double compute_s = 0.0;        // the slowest rank's loop
+  double communication_s = 0.0;  // what the ranks exchange during the timed part
+  double detect_s() const { return compute_s + communication_s; }
+  int slowest_rank = 0;
+  double rank_imbalance = 0.0;  // (max - mean) / max of the ranks' loop times
+};
+
+// Replicated data (the paper's 4.4): every rank holds the whole scene and runs its blocks with
+// `threads_per_rank` threads under `schedule`; the timed part ends with one reduction of the
+// ranks' contact counts (8 bytes). `loop.scale()` prices the work as at one thread.
+MpiPrediction predict_replicated(WorkView work, const MachineCosts& costs, double scale,
+                                 std::uint32_t block, int ranks, int threads_per_rank,
+                                 const Schedule& schedule, const CommunicationModel& network);
+
+// One rank of the distributed-memory decomposition (partition.hpp): its candidate-pair work and
+// the halo it receives, from how many ranks.
+struct DecomposedRank {
+  std::uint64_t work = 0;            // candidate pairs (full stencil)
+  std::uint64_t halo_particles = 0;  // ghosts received
+  std::uint64_t halo_sources = 0;    // ranks they come from (one message each)
+};
+
+// The decomposed detection: each rank's loop costs its share of the one-rank loop time in
+// proportion to its candidate work (`one_rank_s` for `total_work`), run by `threads_per_rank`
+// threads as the loop's own balance allows (`thread_efficiency`, 1 = perfect); the halo
+// exchange sends each ghost as `bytes_per_ghost` bytes, one message per source rank, and an
+// all-to-all of the counts precedes it. Throws std::invalid_argument for no ranks or
+// total_work 0.
+MpiPrediction predict_decomposed(std::span<const DecomposedRank> ranks, std::uint64_t total_work,
+                                 double one_rank_s, int threads_per_rank, double thread_efficiency,
+                                 double bytes_per_ghost, const CommunicationModel& network);
+
+}  // namespace contactlab::tuner

@@ -1,0 +1,237 @@
+#include "contactlab/tuner/thread_emulation.hpp"
+
+#include <fmt/core.h>
+#include <fmt/ranges.h>
+
+#include <algorithm>
+#include <deque>
+#include <set>
+
+#include "contactlab/kernels/error.hpp"
+#include "contactlab/tuner/measured_kernel.hpp"
+#include "contactlab/tuner/tuning_method.hpp"
+#include "contactlab/tuner_model/emulation.hpp"
+
+namespace contactlab::tuner {
+
+void validate(const ThreadEmulationOptions& options) {
+  if (options.variants.empty()) throw InputError("emulate: no variant given");
+  if (options.measured_threads.empty() || options.measured_threads.front() != 1) {
+    throw InputError("emulate: the measured thread counts must start with 1 (the anchor)");
+  }
+  for (const auto* list : {&options.threads, &options.measured_threads, &options.chunk_threads}) {
+    for (const int t : *list) {
+      if (t < 1) throw InputError(fmt::format("emulate: thread count {} is below 1", t));
+    }
+  }
+  if (options.threads.empty()) throw InputError("emulate: no thread count to emulate");
+  if (options.rounds < 1) throw InputError("emulate: --rounds must be >= 1");
+}
+
+namespace {
+
+struct Samples {
+  std::vector<double> setup, detect, total;
+};
+
+nlohmann::json interval(const Summary& s) {
+  return {{"median", s.median},
+          {"low", s.interval.low},
+          {"high", s.interval.high},
+          {"level", s.level},
+          {"repetitions", s.count}};
+}
+
+}  // namespace
+
+TuneOptions structures_for(const std::vector<Variant>& variants) {
+  TuneOptions options;
+  std::set<LoopKind> loops;
+  std::set<Order> orders;
+  std::set<Stencil> stencils;
+  std::set<Precision> precisions;
+  for (const Variant& v : variants) {
+    loops.insert(v.loop);
+    orders.insert(v.order);
+    stencils.insert(v.stencil);
+    precisions.insert(v.precision);
+  }
+  options.loops.assign(loops.begin(), loops.end());
+  options.orders.assign(orders.begin(), orders.end());
+  options.stencils.assign(stencils.begin(), stencils.end());
+  options.precisions.assign(precisions.begin(), precisions.end());
+  return options;
+}
+
+ThreadEmulation emulate_threads(const Scene& scene, double diameter,
+                                const ThreadEmulationOptions& options,
+                                const Calibration& calibration) {
+  validate(options);
+  const std::vector<int>& measured_threads = options.measured_threads;
+  // Timed runs on the scene, interleaved: round r runs every variant at every measured count
+  // once, so a slow spell of the machine touches all of them alike.
+  DetectionKernel kernel(scene, diameter);
+  std::vector<std::vector<Samples>> samples(options.variants.size(),
+                                            std::vector<Samples>(measured_threads.size()));
+  for (const Variant& v : options.variants) {
+    for (const int t : measured_threads) kernel.run(v, t);  // warm-up: first touches
+  }
+  for (int round = 0; round < options.rounds; ++round) {
+    for (std::size_t i = 0; i < options.variants.size(); ++i) {
+      for (std::size_t j = 0; j < measured_threads.size(); ++j) {
+        const KernelRun run = kernel.run(options.variants[i], measured_threads[j]);
+        Samples& s = samples[i][j];
+        s.setup.push_back(run.phase_s("setup"));
+        s.detect.push_back(run.phase_s("detect"));
+        s.total.push_back(s.setup.back() + s.detect.back());
+      }
+    }
+  }
+
+  ThreadEmulation result;
+  result.calibration = calibration;
+  std::deque<LoopWork> works;  // kept alive: PreparedWork holds views
+  std::deque<PreparedWork> prepared;
+  for (std::size_t i = 0; i < options.variants.size(); ++i) {
+    const Variant& variant = options.variants[i];
+    VariantEmulation e;
+    e.variant = variant;
+    for (std::size_t j = 0; j < measured_threads.size(); ++j) {
+      e.measured.push_back({measured_threads[j], summarize(samples[i][j].setup),
+                            summarize(samples[i][j].detect), summarize(samples[i][j].total)});
+    }
+    const MeasuredThreads& one = e.measured.front();
+    const MeasuredThreads& most =
+        *std::max_element(e.measured.begin(), e.measured.end(),
+                          [](const auto& a, const auto& b) { return a.threads < b.threads; });
+    const AmdahlPhase setup =
+        most.threads > 1 ? AmdahlPhase::fit(one.setup_s.median, most.threads, most.setup_s.median)
+                         : AmdahlPhase::serial(one.setup_s.median);
+    works.push_back(kernel.iteration_work(variant, 1));
+    prepared.emplace_back(WorkView{works.back().tests, works.back().homes, works.back().builds});
+    const auto found = result.calibration.structures.find(structure_key(variant));
+    const MachineCosts costs =
+        found != result.calibration.structures.end() ? found->second.costs : MachineCosts{};
+    const AnchoredLoop loop(prepared.back(), costs, variant.schedule, one.detect_s.median);
+    e.anchor_scale = loop.scale();
+    for (const int t : options.threads) {
+      const ScheduleOutcome outcome = loop.replay(t, variant.schedule);
+      e.emulated.push_back({t, setup.at(t), outcome.makespan_seconds, 0.0, outcome.imbalance});
+    }
+    const double one_thread_total = setup.at(1) + loop.seconds(1, variant.schedule);
+    for (EmulatedThreads& point : e.emulated) point.speedup = one_thread_total / point.total_s();
+    for (const MeasuredThreads& m : e.measured) {
+      if (m.threads == 1) continue;
+      const double detect = loop.seconds(m.threads, variant.schedule);
+      e.checks.push_back(
+          {m.threads, m.total_s.median, setup.at(m.threads) + detect, m.detect_s.median, detect});
+    }
+    // The chunk study on the paper's Table 7 loop (the first particle/sorted/full variant).
+    const bool table7_loop = variant.loop == LoopKind::kParticle &&
+                             variant.order == Order::kSorted && variant.stencil == Stencil::kFull;
+    if (table7_loop && result.chunk_study.empty()) {
+      for (const int t : options.chunk_threads) {
+        for (const ScheduleKind kind : {ScheduleKind::kDynamic, ScheduleKind::kStatic}) {
+          EmulatedChunkStudy study;
+          study.threads = t;
+          study.variant = with_schedule(variant, kind, 1);
+          study.block_detect_s = loop.seconds(t, {ScheduleKind::kStatic, 0});
+          for (const int chunk : options.chunk_grid) {
+            const double s = loop.seconds(t, {kind, chunk});
+            study.detect_s.emplace_back(chunk, s);
+            if (study.best_chunk == 0 || s < study.best_detect_s) {
+              study.best_chunk = chunk;
+              study.best_detect_s = s;
+            }
+          }
+          result.chunk_study.push_back(std::move(study));
+        }
+      }
+    }
+    result.variants.push_back(std::move(e));
+  }
+  return result;
+}
+
+nlohmann::json emulation_document(const ThreadEmulation& emulation,
+                                  const ThreadEmulationOptions& options, const Context& context,
+                                  const SceneRecord& scene) {
+  nlohmann::json doc;
+  doc["schema_version"] = 1;
+  doc["kind"] = "contactlab-thread-emulation";
+  doc["label"] = "emulated";
+  doc["context"] = context;
+  doc["scene"] = scene;
+  doc["method"] = fmt::format(
+      "Measured here: every variant at {} thread(s), {} interleaved rounds (medians with 95% "
+      "order-statistic intervals). Emulated: the detection loop's exact work per iteration "
+      "priced by machine costs calibrated on small calibration scenes (not this one) at up to "
+      "{} threads, scaled so that the one-thread replay equals this scene's measured one-thread "
+      "T_c, then replayed under the variant's schedule as libgomp deals it (static, static,k, "
+      "dynamic,k, guided,k); T_s = serial + parallel/P fitted from the measured 1- and "
+      "{}-thread T_s. Not modelled: memory bandwidth and shared caches as threads are added, "
+      "and caches that the split work comes to fit (superlinear speed-up): beyond this "
+      "machine's cores an emulated speed-up is what the schedule's balance allows.",
+      fmt::join(options.measured_threads, ", "), options.rounds, emulation.calibration.threads,
+      *std::max_element(options.measured_threads.begin(), options.measured_threads.end()));
+  doc["measured_threads"] = options.measured_threads;
+  nlohmann::json calibration = nlohmann::json::object();
+  for (const auto& [key, s] : emulation.calibration.structures) {
+    calibration[key] = {{"runs", s.runs}, {"rms_relative_error", s.rms_relative_error}};
+  }
+  doc["calibration"] = {{"threads", emulation.calibration.threads},
+                        {"source", emulation.calibration.source},
+                        {"seconds", emulation.calibration.seconds},
+                        {"structures", calibration}};
+  doc["variants"] = nlohmann::json::array();
+  for (const VariantEmulation& e : emulation.variants) {
+    nlohmann::json v{{"variant", to_string(e.variant)}, {"anchor_scale", e.anchor_scale}};
+    v["measured"] = nlohmann::json::array();
+    for (const MeasuredThreads& m : e.measured) {
+      v["measured"].push_back({{"threads", m.threads},
+                               {"setup_s", interval(m.setup_s)},
+                               {"detect_s", interval(m.detect_s)},
+                               {"total_s", interval(m.total_s)},
+                               {"repetitions", m.total_s.count}});
+    }
+    v["emulated"] = nlohmann::json::array();
+    for (const EmulatedThreads& p : e.emulated) {
+      v["emulated"].push_back({{"threads", p.threads},
+                               {"setup_s", p.setup_s},
+                               {"detect_s", p.detect_s},
+                               {"total_s", p.total_s()},
+                               {"speedup", p.speedup},
+                               {"imbalance", p.imbalance}});
+    }
+    v["validation"] = nlohmann::json::array();
+    for (const EmulationCheck& c : e.checks) {
+      v["validation"].push_back(
+          {{"threads", c.threads},
+           {"measured_total_s", c.measured_total_s},
+           {"emulated_total_s", c.emulated_total_s},
+           {"relative_error", relative_error(c.emulated_total_s, c.measured_total_s)},
+           {"measured_detect_s", c.measured_detect_s},
+           {"emulated_detect_s", c.emulated_detect_s},
+           {"detect_relative_error", relative_error(c.emulated_detect_s, c.measured_detect_s)}});
+    }
+    doc["variants"].push_back(std::move(v));
+  }
+  doc["chunk_study"] = nlohmann::json::array();
+  for (const EmulatedChunkStudy& s : emulation.chunk_study) {
+    nlohmann::json points = nlohmann::json::array();
+    for (const auto& [chunk, seconds] : s.detect_s) {
+      points.push_back({{"chunk", chunk}, {"detect_s", seconds}});
+    }
+    const std::string name = to_string(s.variant);
+    doc["chunk_study"].push_back({{"threads", s.threads},
+                                  {"variant", name.substr(0, name.rfind(',')) + ",k"},
+                                  {"schedule", std::string(to_string(s.variant.schedule.kind))},
+                                  {"points", points},
+                                  {"best_chunk", s.best_chunk},
+                                  {"best_detect_s", s.best_detect_s},
+                                  {"block_detect_s", s.block_detect_s}});
+  }
+  return doc;
+}
+
+}  // namespace contactlab::tuner
