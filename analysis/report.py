@@ -41,8 +41,8 @@ def header(results_dir, tunings):
              "do not edit by hand.\n"]
     if not sources:
         return lines + ["No result files here: every section below is not run.\n"]
-    machines = {(c.get("machine", {}).get("cpu_model", "?"), c.get("machine", {}).get("cores", "?"))
-                for _, c in sources}
+    machines = {(str(c.get("machine", {}).get("cpu_model", "?")).strip(),
+                 c.get("machine", {}).get("cores", "?")) for _, c in sources}
     cpu, cores = sorted(machines, key=str)[0]
     lines.append(f"**Machine:** {cpu}, {cores} cores"
                  + ("" if len(machines) == 1 else f" — **warning: the inputs come from {len(machines)} "
@@ -50,7 +50,7 @@ def header(results_dir, tunings):
     rows = []
     for name, c in sources:
         build = c.get("build", {})
-        rows.append([f"`{name}`", f"{c.get('machine', {}).get('cpu_model', '?')}, "
+        rows.append([f"`{name}`", f"{str(c.get('machine', {}).get('cpu_model', '?')).strip()}, "
                      f"{c.get('machine', {}).get('cores', '?')} cores",
                      f"`{str(build.get('git_commit', '?'))[:10]}`" + (" (dirty)" if build.get("git_dirty") else ""),
                      c.get("date_utc", "?")])

@@ -17,9 +17,11 @@ PREDICTED = "§"
 SHORT_INTERVAL = "‡"  # fewer than 6 samples: the interval is [min, max] and cannot reach 95 %
 
 FOOTNOTE_EMULATED = (f"{EMULATED} emulated, not measured: `contactlab emulate threads` (and `dem "
-                     "profile --emulate`) replay the per-thread work measured on this machine at the "
-                     "thread counts it has, scheduled onto the requested threads (the method is in "
-                     "the file); at a measured thread count the emulated value is shown to validate it.")
+                     "profile --emulate`) price the loop's exact work per iteration with costs "
+                     "calibrated on this machine, scale it to the measured one-thread time and replay "
+                     "it under the schedule at the requested thread count (docs/emulation.md; the "
+                     "method is in the file). Memory bandwidth and cache sharing are not modelled. "
+                     "At a measured thread count the emulated value is shown to validate it.")
 FOOTNOTE_PREDICTED = (f"{PREDICTED} predicted: a performance model's value (emulation-mpi.json, "
                       "tuning/*.json), not a measurement.")
 FOOTNOTE_SHORT = (f"{SHORT_INTERVAL} fewer than 6 repetitions: the interval is [min, max] and does "
@@ -199,7 +201,7 @@ def context_line(document, path="$"):
     machine = need(ctx, f"{path}.context", "machine")
     build = need(ctx, f"{path}.context", "build")
     commit = str(build.get("git_commit", "?"))
-    return (f"{machine.get('cpu_model', '?')}, {machine.get('cores', '?')} cores; "
+    return (f"{str(machine.get('cpu_model', '?')).strip()}, {machine.get('cores', '?')} cores; "
             f"commit {commit[:10]}{' (dirty)' if build.get('git_dirty') else ''}; "
             f"{ctx.get('date_utc', '?')}")
 

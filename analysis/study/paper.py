@@ -125,9 +125,11 @@ def describe(number_, t, curve, emulation):
             imbalance = ""
             if e8 and emulation and 8 in emulation.emulated:
                 imbalance = f", emulated imbalance at 8 threads {emulation.emulated[8]['imbalance']:.0%}"
-            same = (gain < FLAT) == flat_paper
-            text += (f"; ours ({kind}) grows {gain:.2f}x{imbalance}: "
-                     + ("the same shape." if same else "a different shape."))
+            # The same shape: the gains within 25% of each other (both flatten, or both scale).
+            ratio = gain / gain_paper
+            shape = ("the same shape." if 0.8 <= ratio <= 1.25 else
+                     f"ours scales {'less' if ratio < 1 else 'more'} ({ratio:.2f}x the paper's gain).")
+            text += f"; ours ({kind}) grows {gain:.2f}x{imbalance}: " + shape
             if flat_paper and t["variant"].startswith("cell/"):
                 text += (" The paper's flattening of the cell-parallel loop is the load imbalance of "
                          "its centre-clustered scene (few cells hold most particles); ours "

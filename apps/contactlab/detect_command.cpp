@@ -34,7 +34,7 @@ struct DetectCommand {
   std::string json_out_;
   std::string command_line_;
   MpiCliOptions mpi_;
-  std::vector<CLI::Option*> repetition_options_;  // --mpi runs once: these must not be given
+  std::vector<CLI::Option*> adaptive_options_;  // --mpi repeats a fixed count: not these
 
   void add_to(CLI::App& sub);
   void check() const;
@@ -48,17 +48,18 @@ void DetectCommand::add_to(CLI::App& sub) {
                  "loop/order[/stencil]/schedule[/float], or auto (the tuner's cached choice)");
   sub.add_option("--cache", cache_file_, "tuning cache file for --variant auto");
   sub.add_option("--threads", threads_, "OpenMP threads (0 = all)");
-  repetition_options_.push_back(
-      sub.add_option("--repeat", repetition_.repeat, "timed repetitions"));
-  repetition_options_.push_back(
-      sub.add_option("--warmup", repetition_.warmup, "untimed runs first"));
-  repetition_options_.push_back(sub.add_flag(
+  sub.add_option("--repeat", repetition_.repeat, "timed repetitions");
+  sub.add_option("--warmup", repetition_.warmup, "untimed runs first");
+  adaptive_options_.push_back(sub.add_flag(
       "--adaptive", repetition_.adaptive,
       "repeat until the median's 95% interval is within --target-ci (--repeat = minimum)"));
-  sub.add_option("--target-ci", repetition_.target_relative_half_width,
-                 "adaptive: target relative half-width of the median's interval (0.02 = 2%)");
-  sub.add_option("--time-budget", repetition_.time_budget_s, "adaptive: seconds before giving up");
-  sub.add_option("--max-repeat", repetition_.max_repeat, "adaptive: most timed repetitions");
+  adaptive_options_.push_back(
+      sub.add_option("--target-ci", repetition_.target_relative_half_width,
+                     "adaptive: target relative half-width of the median's interval (0.02 = 2%)"));
+  adaptive_options_.push_back(sub.add_option("--time-budget", repetition_.time_budget_s,
+                                             "adaptive: seconds before giving up"));
+  adaptive_options_.push_back(
+      sub.add_option("--max-repeat", repetition_.max_repeat, "adaptive: most timed repetitions"));
   sub.add_flag("--papi", papi_, "count L1/L2 data-cache misses per thread with PAPI");
   sub.add_option("--papi-events", papi_events_,
                  "count these PAPI events instead (comma-separated, e.g. perf::TASK-CLOCK)");
@@ -71,12 +72,15 @@ void DetectCommand::add_to(CLI::App& sub) {
               "run over the MPI processes (under mpirun): replicated (the paper) or decomposed");
 }
 
-// What --mpi cannot combine with (it runs once, without counters).
+// What --mpi cannot combine with (a fixed number of repetitions, without counters).
 void DetectCommand::check_mpi() const {
   if (threads_ < 0) throw InputError("--threads must be >= 0");
-  for (const CLI::Option* option : repetition_options_) {
+  if (repetition_.repeat < 1) throw InputError("--repeat must be >= 1");
+  if (repetition_.warmup < 0) throw InputError("--warmup must be >= 0");
+  for (const CLI::Option* option : adaptive_options_) {
     if (option->count() > 0) {
-      throw InputError("--mpi runs once: " + option->get_name() + " is not supported with it");
+      throw InputError("--mpi repeats a fixed count: " + option->get_name() +
+                       " is not supported with it");
     }
   }
   if (papi_ || !papi_events_.empty() || !cache_sim_.empty()) {
@@ -145,6 +149,8 @@ int DetectCommand::run() const {
     request.variant = variant_;
     request.cache_file = cache_file_;
     request.threads = threads_;
+    request.warmup = repetition_.warmup;
+    request.repeat = repetition_.repeat;
     request.contacts_out = contacts_out_;
     request.json_out = json_out_;
     request.command_line = command_line_;

@@ -45,17 +45,17 @@ tn::MpiRankRecord to_record(const mpi::RankReport& r) {
   return out;
 }
 
-// The run as one record: times are the slowest rank's (T_c = max over ranks of T_c, T_ALL =
-// max of T_s + T_c), one repetition; the ranks' T_c stand where threads' busy times would.
+// The run as one record: each repetition's times are its slowest rank's (T_c = max over ranks
+// of T_c, T_ALL = max of T_s + T_c); the ranks' median T_c stand where threads' busy times
+// would.
 tn::RunRecord make_record(const mpi::MpiRun& run, const MpiDetectRequest& request,
                           const std::string& variant, tn::SceneRecord scene) {
   tn::RunRecord record;
   record.parameters.variant = variant;
   record.parameters.threads = run.local.threads;
   record.parameters.scene = std::move(scene);
-  record.parameters.repetition.repeat = 1;
-  record.parameters.repetition.warmup = 0;
-  double setup = 0, detect = 0, all = 0;
+  record.parameters.repetition.repeat = request.repeat;
+  record.parameters.repetition.warmup = request.warmup;
   std::vector<double> busy;
   std::vector<std::uint64_t> tests;
   tn::RunWork work;
@@ -65,9 +65,6 @@ tn::RunRecord make_record(const mpi::MpiRun& run, const MpiDetectRequest& reques
   m.block = run.mode == mpi::Mode::kReplicated ? request.mpi.block : 0;
   m.halo_width = run.mode == mpi::Mode::kDecomposed ? run.halo_width : 0.0;
   for (const mpi::RankReport& r : run.all) {
-    setup = std::max(setup, r.registration_s);
-    detect = std::max(detect, r.detection_s);
-    all = std::max(all, r.registration_s + r.detection_s);
     busy.push_back(r.detection_s);
     tests.push_back(r.candidate_tests);
     work.candidate_tests += r.candidate_tests;
@@ -81,18 +78,19 @@ tn::RunRecord make_record(const mpi::MpiRun& run, const MpiDetectRequest& reques
                   ? run.partition_grid
                   : std::array<int, 3>{int(run.local.grid[0]), int(run.local.grid[1]),
                                        int(run.local.grid[2])};
-  record.samples.setup_s = {setup};
-  record.samples.detect_s = {detect};
-  record.samples.total_s = {all};
-  record.samples.thread_busy_s = {busy};
-  record.samples.imbalance = {tn::load_imbalance(busy)};
+  record.samples.setup_s = run.repetitions.setup_s;
+  record.samples.detect_s = run.repetitions.detect_s;
+  record.samples.total_s = run.repetitions.total_s;
+  record.samples.thread_busy_s.assign(run.repetitions.detect_s.size(), busy);
+  record.samples.imbalance.assign(run.repetitions.detect_s.size(), tn::load_imbalance(busy));
   tn::RunAggregates a;
   a.setup_s = tn::summarize(record.samples.setup_s);
   a.detect_s = tn::summarize(record.samples.detect_s);
   a.total_s = tn::summarize(record.samples.total_s);
   a.imbalance = tn::summarize(record.samples.imbalance);
   a.thread_busy_median_s = busy;
-  a.repetitions = 1;
+  a.repetitions = static_cast<int>(run.repetitions.detect_s.size());
+  a.warmup_runs = request.warmup;
   a.measurement_s = 0.0;
   for (const auto& r : run.all) a.measurement_s = std::max(a.measurement_s, r.total_s);
   record.aggregates = a;
@@ -193,6 +191,8 @@ int run_detect_mpi(const MpiDetectRequest& request) {
       options.block = request.mpi.block;
       options.halo = request.mpi.halo;
       options.contacts_out = request.contacts_out;
+      options.warmup = request.warmup;
+      options.repeat = request.repeat;
       if (!automatic) variant = parse_variant(request.variant);
       if (!request.json_out.empty() && rank == 0) check_writable(request.json_out);
       open_source(*request.scene, options.mode, opened);

@@ -17,6 +17,8 @@ struct MpiDetectRequest {
   std::string variant;     // or auto: each rank's part tuned (mpi_tuning.hpp)
   std::string cache_file;  // tuning cache for auto
   int threads = 0;
+  int warmup = 0;  // untimed runs, then `repeat` timed ones (the slowest rank of each)
+  int repeat = 1;
   std::string contacts_out;
   std::string json_out;
   std::string command_line;

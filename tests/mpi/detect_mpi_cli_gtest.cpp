@@ -100,13 +100,38 @@ TEST(DetectMpi, ABadParticleSeenByOneRankEndsEveryRankWithOneMessage) {
 
 TEST(DetectMpi, ABadOptionOnEveryRankGivesOneMessage) {
   for (const std::string options :
-       {"--mpi sideways", "--mpi decomposed --repeat 3", "--mpi decomposed --halo 0.001",
+       {"--mpi sideways", "--mpi decomposed --adaptive", "--mpi decomposed --halo 0.001",
         "--mpi replicated --block 0"}) {
     const auto run = run_command(mpiexec(2) + contactlab_exe() +
                                  " detect --scene uniform --n 500 -D 0.02 --threads 1 " + options);
     EXPECT_NE(run.exit_code, 0) << options << ": " << run.output;
     EXPECT_EQ(count_of(run.output, "contactlab: error:"), 1) << options << ": " << run.output;
   }
+}
+
+// --repeat and --warmup: one sample per timed repetition, each its slowest rank's, and the
+// repetition settings in the record.
+TEST(DetectMpi, RepetitionsAreEachTheSlowestRanks) {
+  TempDir dir;
+  const std::string json = dir.file("r.json");
+  const auto run = run_command(mpiexec(2) + contactlab_exe() +
+                               " detect --scene clustered --n 3000 -D 0.03 --threads 1"
+                               " --mpi replicated --warmup 1 --repeat 3 --json " +
+                               json);
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  const tuner::ResultFile file = tuner::read_result_file(json);
+  ASSERT_EQ(file.runs.size(), 1u);
+  const tuner::RunRecord& record = file.runs.front();
+  EXPECT_EQ(record.parameters.repetition.repeat, 3);
+  EXPECT_EQ(record.parameters.repetition.warmup, 1);
+  ASSERT_EQ(record.samples.detect_s.size(), 3u);
+  ASSERT_TRUE(record.aggregates.has_value());
+  EXPECT_EQ(record.aggregates->repetitions, 3);
+  ASSERT_TRUE(record.mpi.has_value());
+  // Each rank's reported T_c is its median: none exceeds the largest repetition's maximum.
+  double largest = 0;
+  for (const double s : record.samples.detect_s) largest = std::max(largest, s);
+  for (const auto& rank : record.mpi->per_rank) EXPECT_LE(rank.detection_s, largest);
 }
 
 // Without mpiexec (a singleton MPI process) --mpi works on one rank.

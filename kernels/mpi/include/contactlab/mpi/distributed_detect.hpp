@@ -48,6 +48,10 @@ struct MpiOptions {
   std::uint32_t block = 200;  // replicated: iterations per block of the block-cyclic deal
   double halo = 0.0;          // decomposed: halo width; 0 = D (or the largest diameter)
   std::string contacts_out;   // CSV of all contacts, empty = none
+  // Untimed runs first (first touches), then timed runs: each rank reports its medians, and
+  // rank 0 gets each repetition's slowest rank (MpiRun::repetitions).
+  int warmup = 0;
+  int repeat = 1;
 };
 
 // One rank's phases (seconds), particles and work. Plain data: gathered as bytes.
@@ -81,6 +85,10 @@ struct MpiRun {
   std::array<int, 3> partition_grid{};
   RankReport local;
   std::vector<RankReport> all;  // every rank's report, on rank 0 only
+  // On rank 0, one entry per timed repetition: the largest over ranks of T_s, T_c and T_s + T_c.
+  struct Repetitions {
+    std::vector<double> setup_s, detect_s, total_s;
+  } repetitions;
 };
 
 // One rank's part of the detection once the scene is read and (decomposed) the particles and
