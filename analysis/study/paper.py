@@ -41,6 +41,16 @@ def _curves(data, table):
     return curve
 
 
+def _ours(curve, threads):
+    """Our T_ALL and speed-up cells at `threads`: measured (interval) or emulated (marked)."""
+    if threads not in curve:
+        return "–", "–"
+    value, s, is_emulated = curve[threads]
+    if is_emulated:
+        return emulated(num(value)), emulated(f"{s:.2f}")
+    return cell(value), "1" if threads == 1 else (speedup_cell(s) if s else "–")
+
+
 def tables_section(data, paper, out):
     out.append("\n## Tables 2–5 and 7: T_ALL = T_s + T_c (seconds), N = 1,024,000, D = 1/200\n")
     if data is None:
@@ -61,17 +71,12 @@ def tables_section(data, paper, out):
         emulation = data.emulation.variants.get(variant) if data.emulation else None
         rows = []
         for threads, t_all, speedup in zip(t["threads"], t["t_all"], t["speedup"]):
-            ours, ours_speedup, check, error = "–", "–", "–", "–"
-            if threads in curve:
-                value, s, is_emulated = curve[threads]
-                if is_emulated:
-                    ours, ours_speedup = emulated(num(value)), emulated(f"{s:.2f}")
-                else:
-                    ours = cell(value)
-                    ours_speedup = "1" if threads == 1 else (speedup_cell(s) if s else "–")
-                    if emulation and threads in emulation.emulated:
-                        e = emulation.emulated[threads]["total_s"]
-                        check, error = emulated(num(e)), percent(relative_error(e, value.median))
+            ours, ours_speedup = _ours(curve, threads)
+            check, error = "–", "–"
+            measured = threads in curve and not curve[threads][2]
+            if measured and emulation and threads in emulation.emulated:
+                e = emulation.emulated[threads]["total_s"]
+                check, error = emulated(num(e)), percent(relative_error(e, curve[threads][0].median))
             rows.append([threads, t_all, speedup if speedup else "1", ours, ours_speedup, check, error])
         out.append(f"\n**Table {number_}** — `{variant}`\n")
         out.extend(table(["threads", "paper T_ALL", "paper speedup", "ours T_ALL [95 %]",
@@ -213,14 +218,7 @@ def headline_rows(data, paper):
     rows = []
     for threads in (1, 2, 16):
         i = t["threads"].index(threads)
-        ours, speedup = "–", "–"
-        if threads in curve:
-            value, s, is_emulated = curve[threads]
-            if is_emulated:
-                ours, speedup = emulated(num(value)), emulated(f"{s:.2f}")
-            else:
-                ours = cell(value)
-                speedup = "1" if threads == 1 else (speedup_cell(s) if s else "–")
+        ours, speedup = _ours(curve, threads)
         rows.append([threads, t["t_all"][i], t["speedup"][i] or "1", ours, speedup])
     return table(["threads", "paper T_ALL [s]", "paper speedup", "ours T_ALL [s]", "ours speedup"], rows)
 

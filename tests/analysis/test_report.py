@@ -42,6 +42,21 @@ class ReportOnFixture(unittest.TestCase):
                 f.write(b"\x89PNG\r\n\x1a\n")  # only linked, never read
         with open(os.path.join(pit, "pictures.json"), "w") as f:
             json.dump({"pictures": {"a_section.png": "t = 2.50 s: the crater", "b_section.png": "t = 0.70 s: the channel"}}, f)
+        # The same emulation on two more core radii (the scene-law section compares them).
+        with open(os.path.join(FIXTURE, "emulation-threads.json")) as f:
+            base = json.load(f)
+        cls.core_speedups = {}
+        for core, slower in ((1, 1.0), (3, 0.5)):
+            document = json.loads(json.dumps(base))
+            document["scene"]["core"] = core
+            for v in document["variants"]:
+                for e in v["emulated"]:
+                    e["detect_s"] *= slower
+                one = next(m for m in v["measured"] if m["threads"] == 1)["detect_s"]["median"]
+                sixteen = next(e for e in v["emulated"] if e["threads"] == 16)["detect_s"]
+                cls.core_speedups[(core, v["variant"])] = one / sixteen
+            with open(os.path.join(cls.results, f"emulation-threads-core-{core}.json"), "w") as f:
+                json.dump(document, f)
         cls.process = run_report(cls.results)
         path = os.path.join(cls.results, "report.md")
         cls.report = open(path, encoding="utf-8").read() if os.path.exists(path) else ""
@@ -148,6 +163,16 @@ class ReportOnFixture(unittest.TestCase):
         # the pictures in time order, linked relative to the report
         crater, channel = dem.index("(../dem/pit/hopper-small/a_section.png)"), dem.index("b_section.png")
         self.assertLess(channel, crater)
+
+    def test_scene_law_compares_core_radii_at_sixteen_threads(self):
+        text = self.section("## Which clustering")
+        self.assertIn("| variant | paper (T_ALL) | c = 1 | c = 3 |", text)
+        cells = self.row(text, ["Table 4: `particle/sorted/full/static`"])
+        self.assertEqual(cells[1], "13.28")
+        self.assertEqual(cells[2], f"*{self.core_speedups[(1, 'particle/sorted/full/static')]:.2f}*†")
+        self.assertEqual(cells[3], f"*{self.core_speedups[(3, 'particle/sorted/full/static')]:.2f}*†")
+        self.assertEqual(self.row(text, ["Table 5: `cell/sorted/full/static`"])[2], "–")  # not emulated
+        self.assertIn("closest core radius", text)
 
     def test_figures_exist(self):
         for name in ("fig8_speedup.png", "fig9_mpi_speedup.png", "fig10_mpi_efficiency.png",
