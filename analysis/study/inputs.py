@@ -67,9 +67,16 @@ def mpi_model(path):
         for spath, s in items(document, "$", "series"):
             points = []
             for ppath, p in items(s, spath, "points"):
-                points.append(SimpleNamespace(**{k: number(p, ppath, k) for k in (
+                point = SimpleNamespace(**{k: number(p, ppath, k) for k in (
                     "processes", "ranks", "compute_s", "communication_s", "detect_s", "speedup",
-                    "efficiency")}))
+                    "efficiency")})
+                # Optional: (max - mean) / max of the ranks' loop times, where the file has it.
+                point.rank_imbalance = number(p, ppath, "rank_imbalance") if "rank_imbalance" in p else None
+                # Optional: the slowest rank's loop timed alone on this machine (measured).
+                point.slowest_measured = (interval_object(p["slowest_rank_measured_s"],
+                                                          f"{ppath}.slowest_rank_measured_s")
+                                          if "slowest_rank_measured_s" in p else None)
+                points.append(point)
             series.append(SimpleNamespace(mode=need(s, spath, "mode"),
                                           threads_per_rank=number(s, spath, "threads_per_rank"),
                                           label=need(s, spath, "label"),

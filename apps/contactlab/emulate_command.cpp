@@ -160,6 +160,7 @@ struct EmulateMpiCommand {
       "link and direction); not measured here";
   std::vector<std::string> measured_;
   int rounds_ = 5;
+  bool measure_slowest_ = true;
   std::string json_out_;
   std::string cache_file_;
   bool recalibrate_ = false;
@@ -236,6 +237,21 @@ int EmulateMpiCommand::run() const {
                                                       1.0, kBytesPerGhost, network));
   }
 
+  // The pure-MPI series' slowest rank, measured alone: its blocks of the loop timed here at one
+  // thread (HomeBlocks, as `detect --mpi replicated` runs them), without the others and without
+  // the network. A measurement of the compute the model predicts, at any rank count.
+  std::vector<tn::Summary> slowest_measured;
+  if (measure_slowest_) {
+    for (std::size_t i = 0; i < processes.size(); ++i) {
+      DetectOptions part;
+      part.blocks = HomeBlocks{block_, static_cast<std::uint32_t>(processes[i]),
+                               static_cast<std::uint32_t>(series[0].points[i].slowest_rank)};
+      tn::DetectionKernel rank_kernel(scene, diameter, part);
+      rank_kernel.run(variant, 1);  // warm-up
+      slowest_measured.push_back(tn::summarize(rank_kernel.samples(variant, 1, rounds_)));
+    }
+  }
+
   fmt::print(
       "emulate mpi: N {}, D {}, {}; one-thread T_c {:.5f} s (median of {}), network {} s "
       "+ bytes / {:.3g} B/s\n",
@@ -252,15 +268,27 @@ int EmulateMpiCommand::run() const {
       const int procs = processes[i];
       fmt::print("  {:>9} {:>6} {:>12.6f} {:>12.3g} {:>9.1f} {:>10.3f}\n", procs, m.ranks,
                  m.detect_s(), m.communication_s, speedup, speedup / procs);
-      points.push_back({{"processes", procs},
-                        {"ranks", m.ranks},
-                        {"threads_per_rank", m.threads_per_rank},
-                        {"compute_s", m.compute_s},
-                        {"communication_s", m.communication_s},
-                        {"detect_s", m.detect_s()},
-                        {"rank_imbalance", m.rank_imbalance},
-                        {"speedup", speedup},
-                        {"efficiency", speedup / procs}});
+      nlohmann::json point{{"processes", procs},
+                           {"ranks", m.ranks},
+                           {"threads_per_rank", m.threads_per_rank},
+                           {"compute_s", m.compute_s},
+                           {"communication_s", m.communication_s},
+                           {"detect_s", m.detect_s()},
+                           {"rank_imbalance", m.rank_imbalance},
+                           {"speedup", speedup},
+                           {"efficiency", speedup / procs}};
+      if (&s == &series.front() && !slowest_measured.empty()) {
+        const tn::Summary& alone = slowest_measured[i];
+        point["slowest_rank"] = m.slowest_rank;
+        point["slowest_rank_measured_s"] = {{"median", alone.median},
+                                            {"low", alone.interval.low},
+                                            {"high", alone.interval.high},
+                                            {"level", alone.level},
+                                            {"repetitions", alone.count}};
+        fmt::print("  {:>9} slowest rank {} measured alone: {:.6f} s (predicted loop {:.6f} s)\n",
+                   procs, m.slowest_rank, alone.median, m.compute_s);
+      }
+      points.push_back(std::move(point));
     }
     series_json.push_back({{"mode", s.mode},
                            {"threads_per_rank", s.threads_per_rank},
@@ -283,6 +311,17 @@ int EmulateMpiCommand::run() const {
                           {"predicted_detect_s", p.detect_s()},
                           {"relative_error", tn::relative_error(p.detect_s(), m.detect_s)},
                           {"oversubscribed", oversubscribed}});
+  }
+  for (std::size_t i = 0; i < slowest_measured.size(); ++i) {
+    const tn::MpiPrediction& m = series[0].points[i];
+    validation.push_back(
+        {{"mode", "replicated, slowest rank alone"},
+         {"ranks", m.ranks},
+         {"threads_per_rank", 1},
+         {"measured_detect_s", slowest_measured[i].median},
+         {"predicted_detect_s", m.compute_s},
+         {"relative_error", tn::relative_error(m.compute_s, slowest_measured[i].median)},
+         {"oversubscribed", false}});
   }
   if (!json_out_.empty()) {
     nlohmann::json doc{
@@ -351,7 +390,10 @@ Subcommand add_emulate_command(CLI::App& app, const std::string& command_line) {
   m->add_option("--measured", mpi->measured_,
                 "detect --mpi replicated --json result files to check the model against")
       ->delimiter(',');
-  m->add_option("--rounds", mpi->rounds_, "timed one-thread runs of the anchor (5)");
+  m->add_option("--rounds", mpi->rounds_,
+                "timed one-thread runs of the anchor and of each slowest rank (5)");
+  m->add_flag("!--no-slowest-rank", mpi->measure_slowest_,
+              "do not time the pure-MPI series' slowest rank alone at each process count");
   m->add_option("--json", mpi->json_out_, "write the prediction (docs/emulation.md)");
   m->add_option("--cache", mpi->cache_file_, "tuning cache holding the machine's calibration");
   m->add_flag("--recalibrate", mpi->recalibrate_, "fit the machine's cost model again");

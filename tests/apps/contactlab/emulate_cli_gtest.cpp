@@ -96,9 +96,20 @@ TEST(EmulateCli, MpiPredictsEverySeriesAndChecksAMeasuredRun) {
     }
   }
   EXPECT_EQ(doc["series"][1]["points"][3]["ranks"], 4);  // 64 processes: 4 ranks of 16
-  ASSERT_EQ(doc["validation"].size(), 1u);
+  // The measured run, then the pure series' slowest rank timed alone at each process count.
+  ASSERT_EQ(doc["validation"].size(), 5u);
+  EXPECT_EQ(doc["validation"][0]["mode"], "replicated");
   EXPECT_EQ(doc["validation"][0]["ranks"], 1);
   EXPECT_FALSE(doc["validation"][0]["oversubscribed"].get<bool>());
+  for (std::size_t i = 1; i < 5; ++i) {
+    EXPECT_EQ(doc["validation"][i]["mode"], "replicated, slowest rank alone");
+  }
+  for (const auto& p : doc["series"][0]["points"]) {
+    const auto& alone = p["slowest_rank_measured_s"];
+    EXPECT_LE(alone["low"].get<double>(), alone["median"].get<double>());
+    EXPECT_LT(p["slowest_rank"].get<int>(), p["ranks"].get<int>());
+  }
+  EXPECT_FALSE(doc["series"][1]["points"][0].contains("slowest_rank_measured_s"));
 }
 
 TEST(EmulateCli, BadInputIsOneLineAndKeepsTheOutput) {
