@@ -114,13 +114,17 @@ def _emulated_vs_predicted(emulation, tunings, out):
             continue
         guesses = "; ".join(f"{scene}: `{variant}` {predicted(f'{s:.4f}')} s"
                             for scene, threads, variant, s in predictions if threads == c.threads) or "–"
+        # The classic formulas beside the emulated best: their chunk and its excess time.
+        classic = "; ".join(f"{k.name} k = {k.chunk}: {emulated(f'{k.detect_s / c.best_detect_s - 1:+.1%}')}"
+                            for k in c.classic) or "–"
         rows.append([c.threads, c.schedule, emulated(str(c.best_chunk)), emulated(num(c.best_detect_s)),
-                     emulated(num(c.block_detect_s)), guesses])
+                     emulated(num(c.block_detect_s)), classic, guesses])
     out.append(f"Emulated on {emulation.scene.get('kind', '?')} N = {emulation.scene.get('n', '?')} "
                "(`particle/sorted/full`); the tuner chooses among structures too, so its choice "
                "may not be `full`.\n")
     out.extend(table(["threads", "schedule", "emulated best k", "emulated best T_c [s]",
-                      "emulated block T_c [s]", "tuner model's prediction (scene: choice, T_c)"], rows)
+                      "emulated block T_c [s]", "classic formulas (dynamic,k) over the best",
+                      "tuner model's prediction (scene: choice, T_c)"], rows)
                if rows else ["(no emulated chunk study at 4, 8 or 16 threads)"])
     tuning.predictions_table(tunings, out)
 

@@ -44,7 +44,12 @@ def thread_emulation(path):
         for cpath, c in items(document, "$", "chunk_study"):
             points = [(number(p, ppath, "chunk"), number(p, ppath, "detect_s"))
                       for ppath, p in items(c, cpath, "points")]
+            # Optional (dynamic rows): the classic formulas' chunks, emulated.
+            classic = [SimpleNamespace(name=need(k, kpath, "name"), chunk=number(k, kpath, "chunk"),
+                                       detect_s=number(k, kpath, "detect_s"))
+                       for kpath, k in (items(c, cpath, "classic") if "classic" in c else [])]
             chunk_study.append(SimpleNamespace(
+                classic=classic,
                 threads=number(c, cpath, "threads"), variant=need(c, cpath, "variant"),
                 schedule=need(c, cpath, "schedule"), points=sorted(points),
                 best_chunk=number(c, cpath, "best_chunk"), best_detect_s=number(c, cpath, "best_detect_s"),

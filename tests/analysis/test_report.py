@@ -57,6 +57,15 @@ class ReportOnFixture(unittest.TestCase):
                 cls.core_speedups[(core, v["variant"])] = one / sixteen
             with open(os.path.join(cls.results, f"emulation-threads-core-{core}.json"), "w") as f:
                 json.dump(document, f)
+        # The classic formulas in the emulated chunk study (dynamic rows).
+        threads_path = os.path.join(cls.results, "emulation-threads.json")
+        with open(threads_path) as f:
+            emulation = json.load(f)
+        for c in emulation["chunk_study"]:
+            if c["schedule"] == "dynamic":
+                c["classic"] = [{"name": "factoring", "chunk": 512, "detect_s": 1.25 * c["best_detect_s"]}]
+        with open(threads_path, "w") as f:
+            json.dump(emulation, f)
         # The pure-MPI series' slowest rank timed alone (emulate mpi writes it at every count).
         mpi_path = os.path.join(cls.results, "emulation-mpi.json")
         with open(mpi_path) as f:
@@ -193,6 +202,14 @@ class ReportOnFixture(unittest.TestCase):
         self.assertTrue(cells[2].endswith("§"), cells)  # the model's loop: predicted
         self.assertEqual(cells[4], f"{1024 ** 0.75:.1f}")  # 0.2 / t
         self.assertIn("gives 181x on our scene against the paper's 682x", text)
+
+    def test_classic_formulas_beside_the_emulated_best_chunk(self):
+        text = self.section("**Best chunk at more threads", until="**The tuner model's predictions")
+        self.assertIn("classic formulas (dynamic,k) over the best", text)
+        rows = [line for line in text.splitlines() if "| dynamic |" in line]
+        self.assertTrue(rows, text)
+        for line in rows:
+            self.assertIn("factoring k = 512: *+25.0%*†", line)
 
     def test_figures_exist(self):
         for name in ("fig8_speedup.png", "fig9_mpi_speedup.png", "fig10_mpi_efficiency.png",

@@ -10,6 +10,7 @@
 #include "contactlab/kernels/error.hpp"
 #include "contactlab/tuner/measured_kernel.hpp"
 #include "contactlab/tuner/tuning_method.hpp"
+#include "contactlab/tuner_model/chunk_formulas.hpp"
 #include "contactlab/tuner_model/emulation.hpp"
 
 namespace contactlab::tuner {
@@ -136,6 +137,12 @@ ThreadEmulation emulate_threads(const Scene& scene, double diameter,
           study.threads = t;
           study.variant = with_schedule(variant, kind, 1);
           study.block_detect_s = loop.seconds(t, {ScheduleKind::kStatic, 0});
+          if (kind == ScheduleKind::kDynamic) {
+            for (const NamedChunk& c : classic_chunks(prepared.back().view(), t, costs)) {
+              study.classic.push_back(
+                  {c.name, c.chunk, loop.seconds(t, {ScheduleKind::kDynamic, c.chunk})});
+            }
+          }
           for (const int chunk : options.chunk_grid) {
             const double s = loop.seconds(t, {kind, chunk});
             study.detect_s.emplace_back(chunk, s);
@@ -222,6 +229,10 @@ nlohmann::json emulation_document(const ThreadEmulation& emulation,
     for (const auto& [chunk, seconds] : s.detect_s) {
       points.push_back({{"chunk", chunk}, {"detect_s", seconds}});
     }
+    nlohmann::json classic = nlohmann::json::array();
+    for (const EmulatedChunkStudy::Classic& c : s.classic) {
+      classic.push_back({{"name", c.name}, {"chunk", c.chunk}, {"detect_s", c.detect_s}});
+    }
     const std::string name = to_string(s.variant);
     doc["chunk_study"].push_back({{"threads", s.threads},
                                   {"variant", name.substr(0, name.rfind(',')) + ",k"},
@@ -229,7 +240,8 @@ nlohmann::json emulation_document(const ThreadEmulation& emulation,
                                   {"points", points},
                                   {"best_chunk", s.best_chunk},
                                   {"best_detect_s", s.best_detect_s},
-                                  {"block_detect_s", s.block_detect_s}});
+                                  {"block_detect_s", s.block_detect_s},
+                                  {"classic", classic}});
   }
   return doc;
 }

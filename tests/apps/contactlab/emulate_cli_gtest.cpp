@@ -62,6 +62,17 @@ TEST(EmulateCli, ThreadsWritesMeasuredEmulatedChecksAndChunks) {
     double best = 1e300;
     for (const auto& p : s["points"]) best = std::min(best, p["detect_s"].get<double>());
     EXPECT_DOUBLE_EQ(s["best_detect_s"].get<double>(), best);
+    // The classic formulas beside the dynamic study, none faster than its best on the grid
+    // unless its chunk is off the grid.
+    if (s["schedule"] == "dynamic") {
+      ASSERT_FALSE(s["classic"].empty());
+      for (const auto& c : s["classic"]) {
+        EXPECT_GE(c["chunk"].get<int>(), 1) << c;
+        EXPECT_GT(c["detect_s"].get<double>(), 0.0) << c;
+      }
+    } else {
+      EXPECT_TRUE(s["classic"].empty());
+    }
   }
 }
 

@@ -58,6 +58,14 @@ struct EmulatedChunkStudy {
   int best_chunk = 0;
   double best_detect_s = 0.0;
   double block_detect_s = 0.0;  // static block of the same structure
+  // dynamic only: the classic formulas' chunks (chunk_formulas.hpp) for this thread count, each
+  // emulated as dynamic,k: {name, chunk, T_c}.
+  struct Classic {
+    std::string name;
+    int chunk = 0;
+    double detect_s = 0.0;
+  };
+  std::vector<Classic> classic;
 };
 
 struct ThreadEmulation {
