@@ -129,6 +129,14 @@ TEST(PredictReplicated, TheSlowestRankAndOneReduction) {
                                              1, 2, {ScheduleKind::kStatic, 1}, network);
   EXPECT_DOUBLE_EQ(h.compute_s, 0.54);
   EXPECT_DOUBLE_EQ(h.communication_s, 0.0);
+  // A fixed cost per rank: paid by every rank, also one with no block (3 ranks, 2 blocks).
+  const MpiPrediction f = predict_replicated(WorkView(trace), MachineCosts::tests_only(), 0.01, 10,
+                                             3, 1, {ScheduleKind::kStatic, 0}, network, 0.1);
+  EXPECT_DOUBLE_EQ(f.compute_s, 0.1 + 0.75);
+  const MpiPrediction idle =
+      predict_replicated(WorkView(trace), MachineCosts::tests_only(), 0.01, 100, 4, 1,
+                         {ScheduleKind::kStatic, 0}, network, 0.1);
+  EXPECT_DOUBLE_EQ(idle.compute_s, 0.1 + 1.02);  // one block of all 20 on rank 0, three idle
 }
 
 TEST(PredictDecomposed, WorkShareThenHaloThenCounts) {
@@ -142,6 +150,9 @@ TEST(PredictDecomposed, WorkShareThenHaloThenCounts) {
   EXPECT_EQ(p.slowest_rank, 1);
   // Two threads at 80% efficiency per rank.
   EXPECT_DOUBLE_EQ(predict_decomposed(ranks, 100, 1.0, 2, 0.8, 40.0, network).compute_s, 0.7 / 1.6);
+  // The fixed part is paid whole; the rest is shared by work: 0.2 + 0.8 * 0.7.
+  EXPECT_DOUBLE_EQ(predict_decomposed(ranks, 100, 1.0, 1, 1.0, 40.0, network, 0.2).compute_s,
+                   0.2 + 0.8 * 0.7);
   EXPECT_THROW(predict_decomposed({}, 100, 1.0, 1, 1.0, 40.0, network), std::invalid_argument);
   EXPECT_THROW(predict_decomposed(ranks, 0, 1.0, 1, 1.0, 40.0, network), std::invalid_argument);
 }

@@ -90,12 +90,14 @@ MpiPrediction slowest_of(const std::vector<double>& rank_s, MpiPrediction predic
 
 MpiPrediction predict_replicated(WorkView work, const MachineCosts& costs, double scale,
                                  std::uint32_t block, int ranks, int threads_per_rank,
-                                 const Schedule& schedule, const CommunicationModel& network) {
-  std::vector<double> rank_s(static_cast<std::size_t>(ranks), 0.0);
+                                 const Schedule& schedule, const CommunicationModel& network,
+                                 double fixed_s) {
+  // Every rank pays the fixed cost, also one with no block (more ranks than blocks).
+  std::vector<double> rank_s(static_cast<std::size_t>(ranks), fixed_s);
   for (int r = 0; r < ranks; ++r) {
     const RankWork mine = replicated_rank_work(work, block, ranks, r);
-    if (mine.tests.empty()) continue;  // more ranks than blocks: this one idles
-    rank_s[r] =
+    if (mine.tests.empty()) continue;
+    rank_s[r] +=
         scale * simulate_schedule(mine.view(), threads_per_rank, schedule, costs).makespan_seconds;
   }
   MpiPrediction prediction;
@@ -108,7 +110,8 @@ MpiPrediction predict_replicated(WorkView work, const MachineCosts& costs, doubl
 
 MpiPrediction predict_decomposed(std::span<const DecomposedRank> ranks, std::uint64_t total_work,
                                  double one_rank_s, int threads_per_rank, double thread_efficiency,
-                                 double bytes_per_ghost, const CommunicationModel& network) {
+                                 double bytes_per_ghost, const CommunicationModel& network,
+                                 double fixed_s) {
   if (ranks.empty()) throw std::invalid_argument("predict_decomposed: no ranks");
   if (total_work == 0) throw std::invalid_argument("predict_decomposed: total_work is 0");
   if (threads_per_rank < 1 || !(thread_efficiency > 0.0)) {
@@ -120,8 +123,9 @@ MpiPrediction predict_decomposed(std::span<const DecomposedRank> ranks, std::uin
   const double counts_s = network.collective_s(count, 8.0 * count / 2.0);
   std::vector<double> compute(ranks.size()), finish(ranks.size());
   for (std::size_t r = 0; r < ranks.size(); ++r) {
-    compute[r] = one_rank_s * static_cast<double>(ranks[r].work) / static_cast<double>(total_work) /
-                 (threads_per_rank * thread_efficiency);
+    compute[r] = fixed_s + (one_rank_s - fixed_s) * static_cast<double>(ranks[r].work) /
+                               static_cast<double>(total_work) /
+                               (threads_per_rank * thread_efficiency);
     const double halo_s = static_cast<double>(ranks[r].halo_sources) * network.latency_s +
                           static_cast<double>(ranks[r].halo_particles) * bytes_per_ghost /
                               network.bandwidth_bytes_per_s;

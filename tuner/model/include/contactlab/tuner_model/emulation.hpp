@@ -96,10 +96,13 @@ struct MpiPrediction {
 
 // Replicated data (the paper's 4.4): every rank holds the whole scene and runs its blocks with
 // `threads_per_rank` threads under `schedule`; the timed part ends with one reduction of the
-// ranks' contact counts (8 bytes). `loop.scale()` prices the work as at one thread.
+// ranks' contact counts (8 bytes). A rank's loop costs `fixed_s` (what a run with no iteration
+// costs on this scene: measured, since every rank pays it however small its share) plus `scale`
+// times its replay under `costs`.
 MpiPrediction predict_replicated(WorkView work, const MachineCosts& costs, double scale,
                                  std::uint32_t block, int ranks, int threads_per_rank,
-                                 const Schedule& schedule, const CommunicationModel& network);
+                                 const Schedule& schedule, const CommunicationModel& network,
+                                 double fixed_s = 0.0);
 
 // One rank of the distributed-memory decomposition (partition.hpp): its candidate-pair work and
 // the halo it receives, from how many ranks.
@@ -109,14 +112,15 @@ struct DecomposedRank {
   std::uint64_t halo_sources = 0;    // ranks they come from (one message each)
 };
 
-// The decomposed detection: each rank's loop costs its share of the one-rank loop time in
-// proportion to its candidate work (`one_rank_s` for `total_work`), run by `threads_per_rank`
-// threads as the loop's own balance allows (`thread_efficiency`, 1 = perfect); the halo
-// exchange sends each ghost as `bytes_per_ghost` bytes, one message per source rank, and an
-// all-to-all of the counts precedes it. Throws std::invalid_argument for no ranks or
-// total_work 0.
+// The decomposed detection: each rank's loop costs `fixed_s` plus its share of the rest of the
+// one-rank loop time in proportion to its candidate work (`one_rank_s` for `total_work`), run by
+// `threads_per_rank` threads as the loop's own balance allows (`thread_efficiency`, 1 = perfect);
+// the halo exchange sends each ghost as `bytes_per_ghost` bytes, one message per source rank, and
+// an all-to-all of the counts precedes it. Throws std::invalid_argument for no ranks or total_work
+// 0.
 MpiPrediction predict_decomposed(std::span<const DecomposedRank> ranks, std::uint64_t total_work,
                                  double one_rank_s, int threads_per_rank, double thread_efficiency,
-                                 double bytes_per_ghost, const CommunicationModel& network);
+                                 double bytes_per_ghost, const CommunicationModel& network,
+                                 double fixed_s = 0.0);
 
 }  // namespace contactlab::tuner
