@@ -6,6 +6,7 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <deque>
 #include <memory>
 #include <nlohmann/json.hpp>
 
@@ -184,34 +185,61 @@ int EmulateMpiCommand::run() const {
   auto [scene, record] = scene_.load();
   const double diameter = scene_.diameter_;
 
-  // The anchor: the variant's loop at one thread on this scene, timed here.
-  tn::DetectionKernel kernel(scene, diameter);
-  kernel.run(variant, 1);
-  const double one_thread_s = tn::median(kernel.samples(variant, 1, rounds_));
   tn::TuningCache cache(cache_file_.empty() ? tn::TuningCache::default_path() : cache_file_);
   const tn::Calibration calibration = tn::machine_calibration(cache, tn::structures_for({variant}),
                                                               omp_get_num_procs(), recalibrate_);
   const auto found = calibration.structures.find(tn::structure_key(variant));
   tn::MachineCosts costs =
       found != calibration.structures.end() ? found->second.costs : tn::MachineCosts{};
+  // The loop's fixed cost is measured on this scene below (a rank with no block of the loop:
+  // every rank pays it, and a rank of 1024 has little else); it replaces the calibrated
+  // per-region cost, which the small calibration scenes fit poorly.
+  costs.seconds_per_region = 0.0;
+  tn::DetectionKernel kernel(scene, diameter);
   const LoopWork work = kernel.iteration_work(variant, 1);
   const tn::WorkView view{work.tests, work.homes, work.builds};
   const tn::PreparedWork prepared(view);
-  // The loop's fixed cost on this scene, measured: a rank with no block of the loop (every rank
-  // pays it, and a rank of 1024 has little else). It replaces the calibrated per-region cost,
-  // which the small calibration scenes fit poorly; the anchor then prices the rest.
-  double fixed_s = 0.0;
-  {
-    const auto iterations = static_cast<std::uint32_t>(work.tests.size());
-    DetectOptions idle;
-    idle.blocks = HomeBlocks{block_, iterations / block_ + 2, iterations / block_ + 1};
-    tn::DetectionKernel idle_kernel(scene, diameter, idle);
-    idle_kernel.run(variant, 1);
-    fixed_s = std::min(tn::median(idle_kernel.samples(variant, 1, rounds_)), one_thread_s / 2);
-  }
-  costs.seconds_per_region = 0.0;
-  const tn::AnchoredLoop loop(prepared, costs, variant.schedule, one_thread_s - fixed_s);
   const tn::CommunicationModel network{latency_s_, bandwidth_, network_source_};
+
+  // Timed here, in interleaved rounds so that a slow spell of the machine touches all alike:
+  // the whole loop at one thread (the anchor), a rank with no block (the fixed cost) and, for
+  // every process count of the pure-MPI series, its slowest rank alone (which rank is slowest
+  // does not depend on the anchor: every rank's time is the same increasing function of its
+  // replay).
+  const auto iterations = static_cast<std::uint32_t>(work.tests.size());
+  std::vector<DetectOptions> parts(1);  // [0]: the rank with no block
+  parts[0].blocks = HomeBlocks{block_, iterations / block_ + 2, iterations / block_ + 1};
+  std::vector<int> slowest_rank;
+  if (measure_slowest_) {
+    for (const int p : processes) {
+      slowest_rank.push_back(
+          tn::predict_replicated(view, costs, 1.0, block_, p, 1, variant.schedule, network)
+              .slowest_rank);
+      DetectOptions part;
+      part.blocks = HomeBlocks{block_, static_cast<std::uint32_t>(p),
+                               static_cast<std::uint32_t>(slowest_rank.back())};
+      parts.push_back(part);
+    }
+  }
+  std::deque<tn::DetectionKernel> rank_kernels;
+  for (const DetectOptions& part : parts) rank_kernels.emplace_back(scene, diameter, part);
+  kernel.run(variant, 1);  // warm-ups
+  for (tn::DetectionKernel& k : rank_kernels) k.run(variant, 1);
+  std::vector<double> anchor_samples;
+  std::vector<std::vector<double>> part_samples(parts.size());
+  for (int round = 0; round < rounds_; ++round) {
+    anchor_samples.push_back(kernel.run(variant, 1).phase_s("detect"));
+    for (std::size_t k = 0; k < parts.size(); ++k) {
+      part_samples[k].push_back(rank_kernels[k].run(variant, 1).phase_s("detect"));
+    }
+  }
+  const double one_thread_s = tn::median(anchor_samples);
+  const double fixed_s = std::min(tn::median(part_samples[0]), one_thread_s / 2);
+  std::vector<tn::Summary> slowest_measured;
+  for (std::size_t k = 1; k < parts.size(); ++k) {
+    slowest_measured.push_back(tn::summarize(part_samples[k]));
+  }
+  const tn::AnchoredLoop loop(prepared, costs, variant.schedule, one_thread_s - fixed_s);
 
   // The decomposition's per-rank work and halo, for each rank count.
   const double reach = scene.has_diameters() ? scene.max_diameter() : diameter;
@@ -250,21 +278,6 @@ int EmulateMpiCommand::run() const {
                                                       1.0, kBytesPerGhost, network, fixed_s));
   }
 
-  // The pure-MPI series' slowest rank, measured alone: its blocks of the loop timed here at one
-  // thread (HomeBlocks, as `detect --mpi replicated` runs them), without the others and without
-  // the network. A measurement of the compute the model predicts, at any rank count.
-  std::vector<tn::Summary> slowest_measured;
-  if (measure_slowest_) {
-    for (std::size_t i = 0; i < processes.size(); ++i) {
-      DetectOptions part;
-      part.blocks = HomeBlocks{block_, static_cast<std::uint32_t>(processes[i]),
-                               static_cast<std::uint32_t>(series[0].points[i].slowest_rank)};
-      tn::DetectionKernel rank_kernel(scene, diameter, part);
-      rank_kernel.run(variant, 1);  // warm-up
-      slowest_measured.push_back(tn::summarize(rank_kernel.samples(variant, 1, rounds_)));
-    }
-  }
-
   fmt::print(
       "emulate mpi: N {}, D {}, {}; one-thread T_c {:.5f} s (median of {}), of which fixed "
       "{:.6f} s (a rank with no block); network {} s + bytes / {:.3g} B/s\n",
@@ -293,14 +306,14 @@ int EmulateMpiCommand::run() const {
                            {"efficiency", speedup / procs}};
       if (&s == &series.front() && !slowest_measured.empty()) {
         const tn::Summary& alone = slowest_measured[i];
-        point["slowest_rank"] = m.slowest_rank;
+        point["slowest_rank"] = slowest_rank[i];
         point["slowest_rank_measured_s"] = {{"median", alone.median},
                                             {"low", alone.interval.low},
                                             {"high", alone.interval.high},
                                             {"level", alone.level},
                                             {"repetitions", alone.count}};
         fmt::print("  {:>9} slowest rank {} measured alone: {:.6f} s (predicted loop {:.6f} s)\n",
-                   procs, m.slowest_rank, alone.median, m.compute_s);
+                   procs, slowest_rank[i], alone.median, m.compute_s);
       }
       points.push_back(std::move(point));
     }
