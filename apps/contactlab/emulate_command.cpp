@@ -274,8 +274,10 @@ int EmulateMpiCommand::run() const {
     for (const RankLoad& load : report.ranks) {
       ranks.push_back({load.work, load.halo_particles, load.halo_sources});
     }
+    // A decomposed rank holds only its particles and ghosts: its fixed cost shrinks with its
+    // share like the rest (the whole scene's fixed cost is a replicated rank's).
     series[2].points.push_back(tn::predict_decomposed(ranks, report.total_work, one_thread_s, 1,
-                                                      1.0, kBytesPerGhost, network, fixed_s));
+                                                      1.0, kBytesPerGhost, network));
   }
 
   fmt::print(
@@ -369,9 +371,10 @@ int EmulateMpiCommand::run() const {
            "replicated: each rank's blocks (block-cyclic) replayed under the variant's schedule "
            "with its threads, priced by the calibrated machine costs scaled to this scene's "
            "measured one-thread T_c, plus the loop's fixed cost measured on this scene (a rank "
-           "with no block), plus one reduction of the contact counts; decomposed: the fixed "
-           "cost plus each rank's candidate work (partition.hpp, work split) as its share of "
-           "the rest of the one-thread T_c, after an all-to-all of counts and its halo (one "
+           "with no block), plus one reduction of the contact counts; decomposed: each rank's "
+           "candidate work (partition.hpp, work split) as its share of the one-thread T_c (its "
+           "fixed cost shrinks with its local scene), after an all-to-all of counts and its halo "
+           "(one "
            "message per source rank, "
            "40 bytes per ghost). Not modelled: the network's contention and topology, the "
            "node's memory bandwidth shared by its ranks"}}},
