@@ -19,6 +19,7 @@
 #include "contactlab/kernels/atomic_file.hpp"
 #include "contactlab/kernels/error.hpp"
 #include "contactlab/tuner/context.hpp"
+#include "contactlab/tuner/thread_emulation.hpp"
 #include "contactlab/tuner_model/emulation.hpp"
 #include "contactlab/tuner_model/statistics.hpp"
 #include "dem_start.hpp"
@@ -136,14 +137,8 @@ int DemProfileCommand::run() const {
                fmt::format("[{:.4g}, {:.4g}]", s.interval.low, s.interval.high),
                static_cast<double>(particles.size()) / s.median, speedup, amdahl(serial, m.threads),
                karp_flatt);
-    measured_json.push_back({{"threads", m.threads},
-                             {"step_s",
-                              {{"median", s.median},
-                               {"low", s.interval.low},
-                               {"high", s.interval.high},
-                               {"level", s.level},
-                               {"repetitions", s.count}}},
-                             {"speedup", speedup}});
+    measured_json.push_back(
+        {{"threads", m.threads}, {"step_s", tn::interval_json(s)}, {"speedup", speedup}});
   }
   fmt::print("Amdahl bound at 2 / 8 / 16 threads: {:.2f} / {:.2f} / {:.2f}\n", amdahl(serial, 2),
              amdahl(serial, 8), amdahl(serial, 16));

@@ -309,11 +309,7 @@ int EmulateMpiCommand::run() const {
       if (&s == &series.front() && !slowest_measured.empty()) {
         const tn::Summary& alone = slowest_measured[i];
         point["slowest_rank"] = slowest_rank[i];
-        point["slowest_rank_measured_s"] = {{"median", alone.median},
-                                            {"low", alone.interval.low},
-                                            {"high", alone.interval.high},
-                                            {"level", alone.level},
-                                            {"repetitions", alone.count}};
+        point["slowest_rank_measured_s"] = tn::interval_json(alone);
         fmt::print("  {:>9} slowest rank {} measured alone: {:.6f} s (predicted loop {:.6f} s)\n",
                    procs, slowest_rank[i], alone.median, m.compute_s);
       }
@@ -385,6 +381,14 @@ int EmulateMpiCommand::run() const {
   return 0;
 }
 
+// What both subcommands write and where their calibration comes from.
+void add_output_options(CLI::App& app, std::string& json_out, std::string& cache_file,
+                        bool& recalibrate) {
+  app.add_option("--json", json_out, "write the document (docs/emulation.md)");
+  app.add_option("--cache", cache_file, "tuning cache holding the machine's calibration");
+  app.add_flag("--recalibrate", recalibrate, "fit the machine's cost model again");
+}
+
 }  // namespace
 
 Subcommand add_emulate_command(CLI::App& app, const std::string& command_line) {
@@ -404,9 +408,7 @@ Subcommand add_emulate_command(CLI::App& app, const std::string& command_line) {
   t->add_option("--chunk-threads", threads->chunk_threads_,
                 "thread counts of the emulated chunk study (2,4,8,16)");
   t->add_option("--rounds", threads->rounds_, "interleaved rounds of timed runs (7)");
-  t->add_option("--json", threads->json_out_, "write the emulation (docs/emulation.md)");
-  t->add_option("--cache", threads->cache_file_, "tuning cache holding the machine's calibration");
-  t->add_flag("--recalibrate", threads->recalibrate_, "fit the machine's cost model again");
+  add_output_options(*t, threads->json_out_, threads->cache_file_, threads->recalibrate_);
 
   auto mpi = std::make_shared<EmulateMpiCommand>();
   mpi->command_line_ = command_line;
@@ -427,9 +429,7 @@ Subcommand add_emulate_command(CLI::App& app, const std::string& command_line) {
                 "timed one-thread runs of the anchor and of each slowest rank (5)");
   m->add_flag("!--no-slowest-rank", mpi->measure_slowest_,
               "do not time the pure-MPI series' slowest rank alone at each process count");
-  m->add_option("--json", mpi->json_out_, "write the prediction (docs/emulation.md)");
-  m->add_option("--cache", mpi->cache_file_, "tuning cache holding the machine's calibration");
-  m->add_flag("--recalibrate", mpi->recalibrate_, "fit the machine's cost model again");
+  add_output_options(*m, mpi->json_out_, mpi->cache_file_, mpi->recalibrate_);
   return {sub, [=] { return (*t) ? threads->run() : mpi->run(); }};
 }
 

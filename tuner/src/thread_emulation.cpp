@@ -35,15 +35,15 @@ struct Samples {
   std::vector<double> setup, detect, total;
 };
 
-nlohmann::json interval(const Summary& s) {
+}  // namespace
+
+nlohmann::json interval_json(const Summary& s) {
   return {{"median", s.median},
           {"low", s.interval.low},
           {"high", s.interval.high},
           {"level", s.level},
           {"repetitions", s.count}};
 }
-
-}  // namespace
 
 TuneOptions structures_for(const std::vector<Variant>& variants) {
   TuneOptions options;
@@ -196,9 +196,9 @@ nlohmann::json emulation_document(const ThreadEmulation& emulation,
     v["measured"] = nlohmann::json::array();
     for (const MeasuredThreads& m : e.measured) {
       v["measured"].push_back({{"threads", m.threads},
-                               {"setup_s", interval(m.setup_s)},
-                               {"detect_s", interval(m.detect_s)},
-                               {"total_s", interval(m.total_s)},
+                               {"setup_s", interval_json(m.setup_s)},
+                               {"detect_s", interval_json(m.detect_s)},
+                               {"total_s", interval_json(m.total_s)},
                                {"repetitions", m.total_s.count}});
     }
     v["emulated"] = nlohmann::json::array();

@@ -89,6 +89,10 @@ ThreadEmulation emulate_threads(const Scene& scene, double diameter,
                                 const ThreadEmulationOptions& options,
                                 const Calibration& calibration);
 
+// A measured median with its 95% interval as the emulation files write it (docs/emulation.md):
+// {median, low, high, level, repetitions}.
+nlohmann::json interval_json(const Summary& summary);
+
 // The document `emulate threads --json` writes (docs/emulation.md).
 nlohmann::json emulation_document(const ThreadEmulation& emulation,
                                   const ThreadEmulationOptions& options, const Context& context,
