@@ -14,6 +14,7 @@
 #include "contactlab/kernels/partition.hpp"
 #include "contactlab/kernels/scene_io.hpp"
 #include "contactlab/mpi/runtime.hpp"
+#include "contactlab/tuner_model/statistics.hpp"
 
 namespace contactlab::mpi {
 
@@ -98,13 +99,6 @@ std::vector<std::uint64_t> pairs_from(const ContactDetector& detector, std::size
     if (pass == 0) pairs.reserve(count);
   }
   return pairs;
-}
-
-double median_of(std::vector<double> values) {
-  const auto middle = values.begin() + static_cast<std::ptrdiff_t>(values.size() / 2);
-  std::nth_element(values.begin(), middle, values.end());
-  if (values.size() % 2 == 1) return *middle;
-  return 0.5 * (*middle + *std::max_element(values.begin(), middle));
 }
 
 void record_run(const DetectRun& run, RankReport& report) {
@@ -423,8 +417,8 @@ MpiRun finish(MPI_Comm comm, PreparedRun& prepared, const DetectOptions& options
       detect[r] = run.detect_s;
       total[r] = run.setup_s + run.detect_s;
     }
-    report.registration_s = median_of(setup);
-    report.detection_s = median_of(detect);
+    report.registration_s = tuner::median(setup);
+    report.detection_s = tuner::median(detect);
     const double output_start = MPI_Wtime();
     // Replicated: rows of other ranks' homes are empty (full stencil) or hold pairs found here
     // (half). Decomposed: rows below `owned` are the owned particles.
