@@ -22,7 +22,8 @@ Calibration sample_calibration() {
   MachineCosts costs;
   costs.seconds_per_test = 3e-9;
   costs.seconds_per_cold_test = 2e-8;
-  c.structures["particle/sorted/half"] = {costs, 0.04, 28};
+  c.structures["particle/sorted/half"] = {
+      costs, 0.04, 28, {{1, 4.8e6, 1.1e-9, 1.0e8, 4.2e-9}, {2, 4.8e6, 1.6e-9, 1.0e8, 3.9e-9}}};
   return c;
 }
 
@@ -79,6 +80,8 @@ TEST(TuningCache, ASettingKeepsChoicesApartAndACalibrationTravelsAsText) {
   EXPECT_EQ(back.threads, 2);
   EXPECT_EQ(back.structures.at("particle/sorted/half").costs,
             sample_calibration().structures.at("particle/sorted/half").costs);
+  EXPECT_EQ(back.structures.at("particle/sorted/half").output,
+            sample_calibration().structures.at("particle/sorted/half").output);
   EXPECT_THROW(TuningCache::calibration_from_text(R"({"seconds": 1})"), InputError);
 }
 
@@ -96,6 +99,7 @@ TEST(TuningCache, StoredEntriesReadBack) {
   const StructureCosts& s = calibration->structures.at("particle/sorted/half");
   EXPECT_EQ(s.costs, sample_calibration().structures.at("particle/sorted/half").costs);
   EXPECT_EQ(s.runs, 28);
+  EXPECT_EQ(s.output, sample_calibration().structures.at("particle/sorted/half").output);
   EXPECT_EQ(cache.choice(sample_scene(), 0.05, 2), variant);
   EXPECT_FALSE(cache.choice(sample_scene(), 0.05, 4).has_value());
   const json j = file_json(cache.path());

@@ -4,6 +4,7 @@
 #include <fmt/core.h>
 #include <omp.h>
 
+#include <cmath>
 #include <deque>
 
 #include "contactlab/kernels/scene_generate.hpp"
@@ -21,6 +22,38 @@ namespace {
 constexpr int kCalibrationSamples = 5;
 
 WorkView view_of(const LoopWork& work) { return {work.tests, work.homes, work.builds}; }
+
+// The loop's part of T_c in kCalibrationSamples runs: what the loop constants are fitted to
+// (the rows written after it are the output term's).
+std::vector<double> loop_samples(DetectionKernel& kernel, const Variant& variant, int threads) {
+  std::vector<double> loop;
+  for (int k = 0; k < kCalibrationSamples; ++k) {
+    const KernelRun r = kernel.run(variant, threads);
+    loop.push_back(r.phase_s("detect") - r.phase_s("assembly"));
+  }
+  return loop;
+}
+
+// The output's bytes and the assembly's seconds per entry per thread (assembly x threads /
+// entries: each thread writes the rows of its own finds) of one structure on one scene, the
+// median of kCalibrationSamples static runs after a warm-up.
+std::pair<double, double> assembly_per_entry(DetectionKernel& kernel, const Variant& structure,
+                                             int threads) {
+  Variant v = structure;
+  v.schedule = Schedule{};
+  kernel.run(v, threads);
+  std::vector<double> per_entry;
+  std::uint64_t entries = 0;
+  for (int k = 0; k < kCalibrationSamples; ++k) {
+    const KernelRun r = kernel.run(v, threads);
+    for (const auto& [name, count] : r.counts) {
+      if (name == "contact_pairs") entries = 2 * count;
+    }
+    per_entry.push_back(
+        entries == 0 ? 0.0 : r.phase_s("assembly") * threads / static_cast<double>(entries));
+  }
+  return {output_bytes(entries), median(per_entry)};
+}
 
 }  // namespace
 
@@ -66,6 +99,12 @@ Calibration calibrate_machine(const TuneOptions& options, int threads) {
   add_scene(SceneKind::kClustered, 40'000, 1.0 / 100.0, every_term);
   add_scene(SceneKind::kClustered, 120'000, 1.0 / 100.0, every_term);
   add_scene(SceneKind::kUniform, 300'000, 1.0 / 150.0, sparse_terms);
+  // The output term (output_cost.hpp): the assembly per entry on the largest dense scene above
+  // (12 MB of rows) and on an output past any cache: 250,000 uniform particles with about 120
+  // contacts each (D^3 N = 30), 30 M entries, 120 MB of rows.
+  constexpr std::size_t kSmallOutputScene = 1;
+  add_scene(SceneKind::kUniform, 250'000, std::cbrt(30.0 / 250'000.0), sparse_terms);
+  const std::size_t large_output_scene = scenes.size() - 1;
   std::deque<DetectionKernel> kernels;  // one per scene, each with its own buffers
   for (const CalibrationScene& c : scenes) kernels.emplace_back(c.scene, c.diameter);
   Calibration calibration;
@@ -75,22 +114,31 @@ Calibration calibrate_machine(const TuneOptions& options, int threads) {
   if (threads > 1) thread_counts.push_back(threads);
   for (const Variant& structure : structures_of(options)) {
     std::vector<LoopWork> works;  // kept alive: TimedRun holds views
-    for (DetectionKernel& kernel : kernels) works.push_back(kernel.iteration_work(structure, 1));
+    for (std::size_t s = 0; s < large_output_scene; ++s) {
+      works.push_back(kernels[s].iteration_work(structure, 1));
+    }
     std::vector<TimedRun> runs;
-    for (std::size_t s = 0; s < scenes.size(); ++s) {
+    for (std::size_t s = 0; s < large_output_scene; ++s) {
       for (const int t : thread_counts) {
         for (const Schedule& schedule : scenes[s].schedules) {
           Variant v = structure;
           v.schedule = schedule;
           kernels[s].run(v, t);  // warm-up
-          runs.push_back({view_of(works[s]), t, schedule,
-                          median(kernels[s].samples(v, t, kCalibrationSamples))});
+          runs.push_back({view_of(works[s]), t, schedule, median(loop_samples(kernels[s], v, t))});
         }
       }
     }
     const CalibrationResult fit = calibrate_costs(runs);
-    calibration.structures[structure_key(structure)] = {fit.costs, fit.rms_relative_error,
-                                                        static_cast<int>(runs.size())};
+    std::vector<OutputCost> output;
+    for (const int t : thread_counts) {
+      const auto [small_bytes, small_per_entry] =
+          assembly_per_entry(kernels[kSmallOutputScene], structure, t);
+      const auto [large_bytes, large_per_entry] =
+          assembly_per_entry(kernels[large_output_scene], structure, t);
+      output.push_back({t, small_bytes, small_per_entry, large_bytes, large_per_entry});
+    }
+    calibration.structures[structure_key(structure)] = {
+        fit.costs, fit.rms_relative_error, static_cast<int>(runs.size()), std::move(output)};
   }
   calibration.seconds = omp_get_wtime() - start;
   return calibration;

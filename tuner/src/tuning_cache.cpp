@@ -24,7 +24,7 @@ using nlohmann::json;
 constexpr int kCacheSchemaVersion = 1;
 // A calibration stored by a cost model with other constants (another kCostModelVersion) is a
 // cache miss.
-constexpr int kCostModelVersion = 2;
+constexpr int kCostModelVersion = 3;  // 3: the output term (output_cost.hpp)
 
 std::string machine_key() {
   const MachineInfo& m = machine_info();
@@ -86,11 +86,21 @@ struct FieldTable<MachineCosts> {
 };
 
 template <>
+struct FieldTable<OutputCost> {
+  using T = OutputCost;
+  static constexpr auto kFields =
+      std::tuple{field("threads", &T::threads), field("small_bytes", &T::small_bytes),
+                 field("small_seconds_per_entry", &T::small_seconds_per_entry),
+                 field("large_bytes", &T::large_bytes),
+                 field("large_seconds_per_entry", &T::large_seconds_per_entry)};
+};
+
+template <>
 struct FieldTable<StructureCosts> {
   using T = StructureCosts;
   static constexpr auto kFields =
       std::tuple{field("costs", &T::costs), field("rms_relative_error", &T::rms_relative_error),
-                 field("runs", &T::runs)};
+                 field("runs", &T::runs), field("output", &T::output)};
 };
 
 template <>

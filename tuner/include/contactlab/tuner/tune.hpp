@@ -18,6 +18,7 @@
 #include "contactlab/kernels/variant.hpp"
 #include "contactlab/tuner/result_schema.hpp"
 #include "contactlab/tuner/tune_report.hpp"
+#include "contactlab/tuner_model/output_cost.hpp"
 #include "contactlab/tuner_model/schedule_model.hpp"
 
 namespace contactlab::tuner {
@@ -56,6 +57,8 @@ struct StructureCosts {
   MachineCosts costs;
   double rms_relative_error = 0.0;
   int runs = 0;
+  // The output's cost past the caches (output_cost.hpp), at 1 and the calibrated threads.
+  std::vector<OutputCost> output;
 };
 
 struct Calibration {

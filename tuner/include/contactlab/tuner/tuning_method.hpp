@@ -29,8 +29,10 @@ struct PricedStructure {
   Variant variant;
   LoopWork work;
   MachineCosts costs;
-  Variant model_choice;  // the structure with the model's best schedule
-  double predicted_s = 0.0;
+  Variant model_choice;      // the structure with the model's best schedule
+  double predicted_s = 0.0;  // the loop's best schedule + output_s
+  std::vector<OutputCost> output;
+  double output_s = 0.0;  // the output term (output_cost.hpp) at the tuned thread count
 };
 
 struct TuningState {
