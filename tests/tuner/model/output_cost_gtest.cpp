@@ -21,6 +21,10 @@ TEST(OutputCost, TheSmallPointAtAndBelowIt) {
 TEST(OutputCost, NothingFromNothing) {
   EXPECT_EQ(output_seconds(kCosts, 0, 1), 0.0);
   EXPECT_EQ(output_seconds({}, 1'000'000'000, 1), 0.0);
+  // A calibration output with no contacts (0 bytes) is not a point to interpolate from.
+  const std::vector<OutputCost> empty_small{{1, 0.0, 0.0, 4e8, 5e-9}};
+  EXPECT_EQ(output_seconds(empty_small, 10'000'000, 1), 0.0);
+  EXPECT_DOUBLE_EQ(output_seconds(empty_small, 100'000'000, 1), 1e8 * 5e-9);
 }
 
 TEST(OutputCost, TheLargePointAtAndPastIt) {

@@ -20,7 +20,7 @@ double output_seconds(std::span<const OutputCost> costs, std::uint64_t entries, 
   double per_entry = c.small_seconds_per_entry;
   if (bytes >= c.large_bytes) {
     per_entry = c.large_seconds_per_entry;
-  } else if (bytes > c.small_bytes && c.large_bytes > c.small_bytes) {
+  } else if (c.small_bytes > 0.0 && bytes > c.small_bytes && c.large_bytes > c.small_bytes) {
     const double along = std::log(bytes / c.small_bytes) / std::log(c.large_bytes / c.small_bytes);
     per_entry += along * (c.large_seconds_per_entry - c.small_seconds_per_entry);
   }
