@@ -1,10 +1,11 @@
-// The detection kernel as the tuner sees it: the output entries it estimates from a sample of
-// homes against the true count, the assembly phase inside T_c, and no estimate for one MPI
-// rank's part.
+// The detection kernel as the tuner sees it: the output it estimates from a sample of homes
+// (entries against the true count, the degree rising with the clustering), the assembly phase
+// inside T_c, and no estimate for one MPI rank's part.
 #include <gtest/gtest.h>
 
-#include <cmath>
 #include <cstdint>
+#include <tuple>
+#include <vector>
 
 #include "contactlab/kernels/scene_generate.hpp"
 #include "contactlab/tuner/measured_kernel.hpp"
@@ -29,8 +30,9 @@ std::uint64_t true_entries(DetectionKernel& kernel) {
   return 0;
 }
 
-TEST(DetectionKernel, EstimatesTheOutputEntriesFromASampleOfHomes) {
+TEST(DetectionKernel, EstimatesTheOutputFromASampleOfHomes) {
   // The dense core (a few cells hold most contacts), the paper's clustering, uniform.
+  std::vector<double> degrees;
   for (const auto& [kind, n, d] :
        {std::tuple{SceneKind::kCore, 60'000, 0.02}, std::tuple{SceneKind::kClustered, 60'000, 0.01},
         std::tuple{SceneKind::kUniform, 60'000, 0.03}}) {
@@ -38,15 +40,21 @@ TEST(DetectionKernel, EstimatesTheOutputEntriesFromASampleOfHomes) {
     DetectionKernel kernel(scene, d);
     const double want = static_cast<double>(true_entries(kernel));
     ASSERT_GT(want, 0.0);
-    const double got = static_cast<double>(kernel.estimated_output_entries());
-    EXPECT_NEAR(got / want, 1.0, 0.05) << to_string(kind) << ": " << got << " vs " << want;
+    const OutputEstimate got = kernel.estimated_output();
+    const double entries = static_cast<double>(got.entries);
+    EXPECT_NEAR(entries / want, 1.0, 0.05) << to_string(kind) << ": " << entries << " vs " << want;
+    // The entry-weighted degree is at least the mean degree (equal only if all are equal).
+    EXPECT_GE(got.degree, 0.95 * want / n) << to_string(kind);
+    degrees.push_back(got.degree);
   }
+  // The core's typical entry belongs to a far denser neighbourhood than the uniform scene's.
+  EXPECT_GT(degrees[0], 3.0 * degrees[2]);
 }
 
 TEST(DetectionKernel, CountsASmallSceneWhole) {
   const Scene scene = make(SceneKind::kUniform, 200, 0.2);
   DetectionKernel kernel(scene, 0.2);
-  EXPECT_EQ(kernel.estimated_output_entries(), true_entries(kernel));
+  EXPECT_EQ(kernel.estimated_output().entries, true_entries(kernel));
 }
 
 TEST(DetectionKernel, TheAssemblyIsPartOfTheDetection) {
@@ -64,7 +72,7 @@ TEST(DetectionKernel, OneRanksPartEstimatesNoOutput) {
   DetectOptions part;
   part.blocks = HomeBlocks{64, 4, 1};
   DetectionKernel kernel(scene, 0.01, part);
-  EXPECT_EQ(kernel.estimated_output_entries(), 0u);
+  EXPECT_EQ(kernel.estimated_output().entries, 0u);
 }
 
 }  // namespace

@@ -23,7 +23,7 @@ Calibration sample_calibration() {
   costs.seconds_per_test = 3e-9;
   costs.seconds_per_cold_test = 2e-8;
   c.structures["particle/sorted/half"] = {
-      costs, 0.04, 28, {{1, 4.8e6, 1.1e-9, 1.0e8, 4.2e-9}, {2, 4.8e6, 1.6e-9, 1.0e8, 3.9e-9}}};
+      costs, 0.04, 28, {{1, 121.5, 1.8e-9, 1480.0, 2.1e-9}, {2, 121.5, 1.9e-9, 1480.0, 2.3e-9}}};
   return c;
 }
 

@@ -34,9 +34,10 @@ std::vector<double> loop_samples(DetectionKernel& kernel, const Variant& variant
   return loop;
 }
 
-// The output's bytes and the assembly's seconds per entry per thread (assembly x threads /
-// entries: each thread writes the rows of its own finds) of one structure on one scene, the
-// median of kCalibrationSamples static runs after a warm-up.
+// The output's entry-weighted degree (as the model estimates it) and the assembly's seconds
+// per entry per thread (assembly x threads / entries: each thread writes the rows of its own
+// finds) of one structure on one scene, the median of kCalibrationSamples static runs after a
+// warm-up.
 std::pair<double, double> assembly_per_entry(DetectionKernel& kernel, const Variant& structure,
                                              int threads) {
   Variant v = structure;
@@ -52,7 +53,7 @@ std::pair<double, double> assembly_per_entry(DetectionKernel& kernel, const Vari
     per_entry.push_back(
         entries == 0 ? 0.0 : r.phase_s("assembly") * threads / static_cast<double>(entries));
   }
-  return {output_bytes(entries), median(per_entry)};
+  return {kernel.estimated_output().degree, median(per_entry)};
 }
 
 }  // namespace
@@ -99,12 +100,13 @@ Calibration calibrate_machine(const TuneOptions& options, int threads) {
   add_scene(SceneKind::kClustered, 40'000, 1.0 / 100.0, every_term);
   add_scene(SceneKind::kClustered, 120'000, 1.0 / 100.0, every_term);
   add_scene(SceneKind::kUniform, 300'000, 1.0 / 150.0, sparse_terms);
-  // The output term (output_cost.hpp): the assembly per entry on the largest dense scene above
-  // (12 MB of rows) and on an output past any cache: 250,000 uniform particles with about 120
-  // contacts each (D^3 N = 30), 30 M entries, 120 MB of rows.
-  constexpr std::size_t kSmallOutputScene = 1;
+  // The output term (output_cost.hpp): the assembly per entry at a high entry-weighted degree
+  // (the 120,000-particle clustered scene above: the paper's law at the paper's N D^3, up to 350
+  // particles per cell) and at a low one: 250,000 uniform particles with about 120 contacts
+  // each (D^3 N = 30), 30 M entries, at most 53 particles per cell.
+  constexpr std::size_t kHighDegreeScene = 1;
   add_scene(SceneKind::kUniform, 250'000, std::cbrt(30.0 / 250'000.0), sparse_terms);
-  const std::size_t large_output_scene = scenes.size() - 1;
+  const std::size_t low_degree_scene = scenes.size() - 1;
   std::deque<DetectionKernel> kernels;  // one per scene, each with its own buffers
   for (const CalibrationScene& c : scenes) kernels.emplace_back(c.scene, c.diameter);
   Calibration calibration;
@@ -114,11 +116,11 @@ Calibration calibrate_machine(const TuneOptions& options, int threads) {
   if (threads > 1) thread_counts.push_back(threads);
   for (const Variant& structure : structures_of(options)) {
     std::vector<LoopWork> works;  // kept alive: TimedRun holds views
-    for (std::size_t s = 0; s < large_output_scene; ++s) {
+    for (std::size_t s = 0; s < low_degree_scene; ++s) {
       works.push_back(kernels[s].iteration_work(structure, 1));
     }
     std::vector<TimedRun> runs;
-    for (std::size_t s = 0; s < large_output_scene; ++s) {
+    for (std::size_t s = 0; s < low_degree_scene; ++s) {
       for (const int t : thread_counts) {
         for (const Schedule& schedule : scenes[s].schedules) {
           Variant v = structure;
@@ -131,11 +133,11 @@ Calibration calibrate_machine(const TuneOptions& options, int threads) {
     const CalibrationResult fit = calibrate_costs(runs);
     std::vector<OutputCost> output;
     for (const int t : thread_counts) {
-      const auto [small_bytes, small_per_entry] =
-          assembly_per_entry(kernels[kSmallOutputScene], structure, t);
-      const auto [large_bytes, large_per_entry] =
-          assembly_per_entry(kernels[large_output_scene], structure, t);
-      output.push_back({t, small_bytes, small_per_entry, large_bytes, large_per_entry});
+      const auto [low_degree, low_per_entry] =
+          assembly_per_entry(kernels[low_degree_scene], structure, t);
+      const auto [high_degree, high_per_entry] =
+          assembly_per_entry(kernels[kHighDegreeScene], structure, t);
+      output.push_back({t, low_degree, low_per_entry, high_degree, high_per_entry});
     }
     calibration.structures[structure_key(structure)] = {
         fit.costs, fit.rms_relative_error, static_cast<int>(runs.size()), std::move(output)};

@@ -72,14 +72,14 @@ std::pair<std::uint64_t, std::uint64_t> DetectionKernel::wrong_results() {
   return contact_differences(reference_, detector_.canonical_contacts());
 }
 
-std::uint64_t DetectionKernel::estimated_output_entries() {
-  if (restricted()) return 0;
-  if (!output_entries_) {
+OutputEstimate DetectionKernel::estimated_output() {
+  if (restricted()) return {};
+  if (!output_) {
     // Every 16th particle in cell order: a sample stratified within every cell (blocks of 16
     // or 256 particles aliased with the clustering: on a 60,000-particle clustered scene the
     // estimate moved from 0.76 to 1.22 of the truth with the offset; single particles keep
-    // it within 2.5 %). Their rows (full stencil) hold every contact of theirs. A scene of
-    // fewer than 256 particles is counted whole.
+    // it within 2.5 %). Their rows (full stencil) hold every contact of theirs: their degrees.
+    // A scene of fewer than 256 particles is counted whole.
     constexpr std::uint32_t kEvery = 16, kWholeBelow = 256;
     const std::uint64_t n = scene_.size();
     DetectOptions options{parse_variant("particle/sorted/full/static"), diameter_, 0, nullptr};
@@ -87,11 +87,22 @@ std::uint64_t DetectionKernel::estimated_output_entries() {
     ContactDetector sampler;
     sampler.run(scene_, options);
     const std::uint64_t sampled = options.blocks.size(n);
-    const double entries = static_cast<double>(sampler.contacts().partners.size());
-    output_entries_ = static_cast<std::uint64_t>(std::llround(
-        sampled == 0 ? 0.0 : entries * static_cast<double>(n) / static_cast<double>(sampled)));
+    const auto& offsets = sampler.contacts().offsets;
+    double entries = 0.0, squares = 0.0;
+    for (std::size_t i = 0; i + 1 < offsets.size(); ++i) {
+      const auto k = static_cast<double>(offsets[i + 1] - offsets[i]);
+      entries += k;
+      squares += k * k;
+    }
+    OutputEstimate estimate;
+    if (sampled > 0 && entries > 0.0) {
+      estimate.entries = static_cast<std::uint64_t>(
+          std::llround(entries * static_cast<double>(n) / static_cast<double>(sampled)));
+      estimate.degree = squares / entries;
+    }
+    output_ = estimate;
   }
-  return *output_entries_;
+  return *output_;
 }
 
 }  // namespace contactlab::tuner

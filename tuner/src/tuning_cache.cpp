@@ -24,7 +24,7 @@ using nlohmann::json;
 constexpr int kCacheSchemaVersion = 1;
 // A calibration stored by a cost model with other constants (another kCostModelVersion) is a
 // cache miss.
-constexpr int kCostModelVersion = 3;  // 3: the output term (output_cost.hpp)
+constexpr int kCostModelVersion = 4;  // 3, 4: the output term (output_cost.hpp) by bytes, by degree
 
 std::string machine_key() {
   const MachineInfo& m = machine_info();
@@ -89,10 +89,10 @@ template <>
 struct FieldTable<OutputCost> {
   using T = OutputCost;
   static constexpr auto kFields =
-      std::tuple{field("threads", &T::threads), field("small_bytes", &T::small_bytes),
-                 field("small_seconds_per_entry", &T::small_seconds_per_entry),
-                 field("large_bytes", &T::large_bytes),
-                 field("large_seconds_per_entry", &T::large_seconds_per_entry)};
+      std::tuple{field("threads", &T::threads), field("low_degree", &T::low_degree),
+                 field("low_seconds_per_entry", &T::low_seconds_per_entry),
+                 field("high_degree", &T::high_degree),
+                 field("high_seconds_per_entry", &T::high_seconds_per_entry)};
 };
 
 template <>

@@ -67,7 +67,7 @@ class ModelMethod final : public TuningMethod {
     const TuneOptions& options = state.options;
     nlohmann::json table = nlohmann::json::array();
     // The same for every structure (the contacts do not depend on it): estimated once.
-    const std::uint64_t entries = state.kernel.estimated_output_entries();
+    const OutputEstimate output = state.kernel.estimated_output();
     for (const Variant& structure : structures_of(options)) {
       const auto found = state.calibration.structures.find(structure_key(structure));
       const bool calibrated = found != state.calibration.structures.end();
@@ -79,7 +79,7 @@ class ModelMethod final : public TuningMethod {
                         calibrated ? found->second.output : std::vector<OutputCost>{}};
       std::tie(s.model_choice, s.predicted_s) = best_schedule(
           state.kernel, structure, view_of(s.work), state.threads, s.costs, options.chunk_grid);
-      s.output_s = output_seconds(s.output, entries, state.threads);
+      s.output_s = output_seconds(s.output, output, state.threads);
       s.predicted_s += s.output_s;
       table.push_back({{"variant", to_string(s.model_choice)},
                        {"predicted_s", s.predicted_s},
@@ -99,7 +99,7 @@ class ModelMethod final : public TuningMethod {
       const auto [variant, seconds] = best_schedule(state.kernel, best.variant, view_of(best.work),
                                                     p, best.costs, options.chunk_grid);
       state.report.predictions.push_back(
-          {p, to_string(variant), seconds + output_seconds(best.output, entries, p),
+          {p, to_string(variant), seconds + output_seconds(best.output, output, p),
            p > omp_get_num_procs() ? "predicted (model only: more threads than this machine has)"
                                    : "predicted (model only)"});
     }

@@ -16,6 +16,7 @@
 #include "contactlab/kernels/detector.hpp"
 #include "contactlab/kernels/scene.hpp"
 #include "contactlab/kernels/variant.hpp"
+#include "contactlab/tuner_model/output_cost.hpp"
 
 namespace contactlab::tuner {
 
@@ -36,9 +37,9 @@ class MeasuredKernel {
   virtual LoopWork iteration_work(const Variant& variant, int threads) = 0;
   // Results of the last run that differ from the exact reference: {missing, extra}.
   virtual std::pair<std::uint64_t, std::uint64_t> wrong_results() = 0;
-  // The entries the output will hold, estimated without a timed run, for the model's output
-  // term (output_cost.hpp); 0: no such term.
-  virtual std::uint64_t estimated_output_entries() { return 0; }
+  // The output (its entries and their degree), estimated without a timed run, for the model's
+  // output term (output_cost.hpp); no entries: no such term.
+  virtual OutputEstimate estimated_output() { return {}; }
 
   // A kernel run by several processes together (MPI ranks, each on its own part) is as fast as
   // its slowest part, and every part must take the same decisions (the same runs in the same
@@ -56,9 +57,10 @@ class MeasuredKernel {
 // Contact detection of one scene: phases "setup" (T_s) and "detect" (T_c, tuned), and within
 // T_c "assembly" (the contact lists' rows written after the loop: T_c less the slowest thread's
 // loop); counts "candidate_tests" and "contact_pairs"; the reference is the exact
-// particle/sorted/half run. Its output: both partner lists, two entries per contact, estimated
-// from a stratified sample of homes (every 16th particle in cell order, full stencil: their
-// rows are exact); a restricted kernel (one MPI rank's part) estimates none.
+// particle/sorted/half run. Its output: both partner lists, two entries per contact, and their
+// entry-weighted degree, estimated from a stratified sample of homes (every 16th particle in
+// cell order, full stencil: their rows are exact); a restricted kernel (one MPI rank's part)
+// estimates none.
 //
 // `base` restricts the homes (HomeRange, HomeBlocks: one MPI rank's part of the detection; its
 // variant, diameter and threads are ignored); the reference then has the same homes and the
@@ -74,7 +76,7 @@ class DetectionKernel final : public MeasuredKernel {
   KernelRun run(const Variant& variant, int threads) override;
   LoopWork iteration_work(const Variant& variant, int threads) override;
   std::pair<std::uint64_t, std::uint64_t> wrong_results() override;
-  std::uint64_t estimated_output_entries() override;
+  OutputEstimate estimated_output() override;
 
  private:
   DetectOptions options_for(const Variant& variant, int threads) const;
@@ -91,7 +93,7 @@ class DetectionKernel final : public MeasuredKernel {
   std::string reference_structure_;  // restricted homes: the structure of the reference
   Variant last_;                     // the variant of the last run
   bool have_reference_ = false;
-  std::optional<std::uint64_t> output_entries_;  // estimated once
+  std::optional<OutputEstimate> output_;  // estimated once
 };
 
 }  // namespace contactlab::tuner

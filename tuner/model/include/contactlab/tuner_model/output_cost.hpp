@@ -8,7 +8,15 @@
 // thirds of the half stencil's T_c, while the calibration scenes have far fewer entries per
 // test. Priced inside the per-test constant, it made the model choose the half stencil where
 // the full one ran 1.4x faster. So the loop constants are fitted to the loop alone and the
-// output is priced here, from two measured points per structure and thread count.
+// output is priced here.
+//
+// Per entry, the half stencil's reverse entries cost more where one home's finds reach more
+// rows (more cache lines than L1, then than L2, written once each): measured at 2 threads,
+// 1.8 ns per entry per thread where cells hold at most 53 particles, 2.2 ns with up to 350-1,700
+// (the paper's clustering, an off-centre blob), 3.1 ns with 5,100 (the dense core); not the
+// output's size (a 29 MB and a 115 MB uniform output cost the same). So the cost is measured at
+// two degrees: the entry-weighted mean degree (sum k^2 / sum k over the particles' contact
+// counts k, the degree of the typical entry's particle) of two calibration scenes.
 #pragma once
 
 #include <cstdint>
@@ -17,23 +25,27 @@
 namespace contactlab::tuner {
 
 // The assembly's seconds per output entry, per thread (assembly time x threads / entries: each
-// thread writes the rows of its own finds), at two output sizes, measured by calibration at
-// `threads` threads: a small output (in cache) and a large one (far past the caches).
+// thread writes the rows of its own finds), measured by calibration at `threads` threads on a
+// scene of low entry-weighted degree and on one of high degree.
 struct OutputCost {
   int threads = 1;
-  double small_bytes = 0.0, small_seconds_per_entry = 0.0;
-  double large_bytes = 0.0, large_seconds_per_entry = 0.0;
+  double low_degree = 0.0, low_seconds_per_entry = 0.0;
+  double high_degree = 0.0, high_seconds_per_entry = 0.0;
   friend bool operator==(const OutputCost&, const OutputCost&) = default;
 };
 
-// The bytes of an output of `entries` partner entries (32-bit ids).
-inline double output_bytes(std::uint64_t entries) { return 4.0 * static_cast<double>(entries); }
+// What the model knows of an output before any timed run: its entries (two per contact) and
+// their entry-weighted mean degree.
+struct OutputEstimate {
+  std::uint64_t entries = 0;
+  double degree = 0.0;
+};
 
-// The time to write an output of `entries` entries at `threads` threads: entries / threads x
-// c(bytes), with c interpolated linearly in log(bytes) between the two points and held constant
-// outside them. Uses the point calibrated at the largest thread count not above `threads` (else
-// the smallest), and assumes the entries split evenly over the threads (a prediction past the
+// The time to write the output at `threads` threads: entries / threads x c(degree), with c
+// interpolated linearly in log(degree) between the two points and held constant outside them.
+// Uses the point calibrated at the largest thread count not above `threads` (else the
+// smallest), and assumes the entries split evenly over the threads (a prediction past the
 // calibrated count assumes the writes scale with the threads). Empty costs or no entries: 0.
-double output_seconds(std::span<const OutputCost> costs, std::uint64_t entries, int threads);
+double output_seconds(std::span<const OutputCost> costs, const OutputEstimate& output, int threads);
 
 }  // namespace contactlab::tuner
