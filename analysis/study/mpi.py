@@ -157,9 +157,8 @@ def _figures(model, mpi, figures_dir):
             ys, low, high = [], [], []
             for p in alone:
                 i = p.slowest_measured
-                value = t1 / i.median if quantity == "speedup" else t1 / i.median / p.processes
-                lo = t1 / i.high if quantity == "speedup" else t1 / i.high / p.processes
-                hi = t1 / i.low if quantity == "speedup" else t1 / i.low / p.processes
+                per = 1 if quantity == "speedup" else p.processes  # efficiency = speed-up / processes
+                value, lo, hi = t1 / i.median / per, t1 / i.high / per, t1 / i.low / per
                 ys.append(value)
                 low.append(value - lo)
                 high.append(hi - value)

@@ -370,10 +370,8 @@ int EmulateMpiCommand::run() const {
            "with no block), plus one reduction of the contact counts; decomposed: each rank's "
            "candidate work (partition.hpp, work split) as its share of the one-thread T_c (its "
            "fixed cost shrinks with its local scene), after an all-to-all of counts and its halo "
-           "(one "
-           "message per source rank, "
-           "40 bytes per ghost). Not modelled: the network's contention and topology, the "
-           "node's memory bandwidth shared by its ranks"}}},
+           "(one message per source rank, 40 bytes per ghost). Not modelled: the network's "
+           "contention and topology, the node's memory bandwidth shared by its ranks"}}},
         {"series", series_json},
         {"validation", validation}};
     write_json(json_out_, doc);
