@@ -114,6 +114,7 @@ void ContactDetector::detect(const CellGrid& grid, const Layout& layout, const P
     detail::ThreadOutput& mine = thread_out_[tid];
     mine.partners.clear();
     mine.homes.clear();
+    mine.homes.reserve(n);
     ContactOp<PairTest> op(test, mine.partners, mine.homes, found_count_.data());
     if (options.observer) options.observer->thread_begin(tid);
     const double loop_start = omp_get_wtime();

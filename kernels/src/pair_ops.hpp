@@ -145,7 +145,7 @@ class ContactOp {
  public:
   static constexpr bool kTestsPairs = true;
 
-  ContactOp(const PairTest& test, detail::PartnerBuffer& out, std::vector<std::uint32_t>& homes,
+  ContactOp(const PairTest& test, detail::PartnerBuffer& out, LargeVector<std::uint32_t>& homes,
             std::uint32_t* found_count)
       : test_(test), out_(out), homes_(homes), found_count_(found_count) {}
 
@@ -188,7 +188,7 @@ class ContactOp {
 
   PairTest test_;
   detail::PartnerBuffer& out_;
-  std::vector<std::uint32_t>& homes_;
+  LargeVector<std::uint32_t>& homes_;
   std::uint32_t* found_count_;
   std::uint64_t tests_ = 0;
 };
