@@ -278,13 +278,15 @@ void Engine::compute_forces(bool final_kick) {
   auto add_walls = [&](std::size_t a, double& fx, double& fy, double& fz, double& tx, double& ty,
                        double& tz, double& touching, std::uint64_t& large_here,
                        std::uint32_t& bad_wall_here) {
+    const std::uint32_t reach = wall_reach_[a];
+    // Most particles of a scene reach no wall: skip them before loading anything else.
+    if (reach == 0 && wall_count <= 32) return;
     // a's position, radius, mass and synchronised velocities from its kin_ block (one or two
     // cache lines, not nine arrays); the same values as the particle arrays.
     const double* ka = &kin_[kKinStride * a];
     const double xa = ka[0], ya = ka[1], za = ka[2], r = ka[3], mass = ka[7];
     const double pvxa = ka[4], pvya = ka[5], pvza = ka[6], pwxa = ka[8], pwya = ka[9],
                  pwza = ka[10];
-    const std::uint32_t reach = wall_reach_[a];
     for (std::size_t w = 0; w < wall_count; ++w) {
       if (w < 32 && ((reach >> w) & 1u) == 0) continue;  // out of reach (its spring is zero)
       double* hx = &p.wall_spring[3 * w][a];

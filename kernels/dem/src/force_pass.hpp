@@ -31,29 +31,34 @@ inline void combine_counts(std::uint64_t here, std::uint32_t bad_here, std::uint
 }
 
 // The rows [first, last) of a block: each row's outputs summed in pair order (i's force,
-// torque, touching contacts) and handed to store(i, sum), its overlaps counted, and each pair
-// handed to j_side(o, k, b) after its i side (o: the block's outputs, b: the pair's lane).
+// torque, touching contacts: lanes 0-6 of the sum, lane 7 zero) and handed to store(i, sum),
+// its overlaps counted, and each pair handed to j_side(p, roll, k, b) after its i side (p: the
+// pair's record, roll: the block's rolling torques, b: the pair's lane). A record times
+// (1, 1, 1, -r_i, -r_i, -r_i, 1, 0) adds lane by lane what the scalar sums add (a + b(-c) is
+// a - bc, exactly), so the sums keep their bits.
 template <bool kRolling, class JSide, class Store>
 inline void sum_rows(const PairList& q, std::size_t first, std::size_t last, PairBlock& blk,
                      const double* kin, std::uint64_t& large, std::uint32_t& bad, JSide&& j_side,
                      Store&& store) {
-  const double* o[PairBlock::kOutputs];
-  for (int f = 0; f < PairBlock::kOutputs; ++f) o[f] = blk.out(static_cast<PairBlock::Output>(f));
   const std::size_t k0 = q.rows[first];
+  const double* rec = to_records(blk, q.rows[last] - k0);
+  const double* roll[3] = {blk.out(PairBlock::kRollX), blk.out(PairBlock::kRollY),
+                           blk.out(PairBlock::kRollZ)};
   for (std::size_t i = first; i < last; ++i) {
     const double ri = kin[kKinStride * i + 3];
-    double sum[7] = {0, 0, 0, 0, 0, 0, 0};
+    const Lanes scale{1, 1, 1, -ri, -ri, -ri, 1, 0};
+    Lanes sum{};
     for (std::size_t k = q.rows[i]; k < q.rows[i + 1]; ++k) {
       const std::size_t b = k - k0;
-      large += o[PairBlock::kLarge][b] != 0.0;
-      if (o[PairBlock::kFailing][b] != 0.0) bad = std::min(bad, static_cast<std::uint32_t>(k));
-      for (int d = 0; d < 3; ++d) {
-        sum[d] += o[PairBlock::kFx + d][b];
-        sum[3 + d] -= ri * o[PairBlock::kCx + d][b];
-        if constexpr (kRolling) sum[3 + d] += o[PairBlock::kRollX + d][b];
+      const double* p = rec + kLanes * b;
+      if (const double flag = p[PairBlock::kOverlapFlag]; flag != 0.0) [[unlikely]] {
+        ++large;
+        if (flag > 1.0) bad = std::min(bad, static_cast<std::uint32_t>(k));
       }
-      sum[6] += o[PairBlock::kTouch][b];
-      j_side(o, k, b);
+      sum += load_lanes(p) * scale;
+      // + 0 keeps every lane's bits: no sum here is -0 (sums from +0 never are).
+      if constexpr (kRolling) sum += Lanes{0, 0, 0, roll[0][b], roll[1][b], roll[2][b], 0, 0};
+      j_side(p, roll, k, b);
     }
     store(i, sum);
   }
@@ -61,38 +66,36 @@ inline void sum_rows(const PairList& q, std::size_t first, std::size_t last, Pai
 
 // The ordered pass's sums: each row summed in registers and stored to its particle (nothing
 // reached it before: its j sides come from later rows), then each j side subtracted from j's
-// sum when this thread owns j (j >= own_begin); otherwise the outputs are kept in q.out /
-// q.roll_* for j's owner, which adds them after the barrier (they come from later rows, so
+// sum when this thread owns j (j >= own_begin); otherwise the record is kept in q.out /
+// q.roll_* for j's owner, which adds it after the barrier (they come from later rows, so
 // pair order still holds). Particle a's sum is therefore its own row, then its j sides in
 // pair order, whatever the thread count.
 template <bool kRolling>
 inline void accumulate_ordered(const double* kin, PairList& q, std::size_t first, std::size_t last,
                                PairBlock& blk, std::size_t own_begin, double* acc,
                                std::uint64_t& large, std::uint32_t& bad) {
-  constexpr std::size_t kOut = PairList::kOutStride;
-  auto j_side = [&](const double* const* o, std::size_t k, std::size_t b) {
+  static_assert(PairList::kOutStride == kLanes && kAccStride == kLanes);
+  auto j_side = [&](const double* p, const double* const* roll, std::size_t k, std::size_t b) {
     const std::uint32_t j = q.j[k];
     if (j < own_begin) {  // another thread's particle: left for its owner
-      for (int f = 0; f <= PairBlock::kTouch; ++f) q.out[kOut * k + f] = o[f][b];
+      store_lanes(&q.out[kLanes * k], load_lanes(p));
       if constexpr (kRolling) {
-        q.roll_x[k] = o[PairBlock::kRollX][b];
-        q.roll_y[k] = o[PairBlock::kRollY][b];
-        q.roll_z[k] = o[PairBlock::kRollZ][b];
+        q.roll_x[k] = roll[0][b];
+        q.roll_y[k] = roll[1][b];
+        q.roll_z[k] = roll[2][b];
       }
       return;
     }
+    // Lane by lane the scalar j side: a - f, a - r_j c, a - (-t) = a + t (lane 7 unused).
     const double rj = kin[kKinStride * j + 3];
     double* aj = acc + kAccStride * j;
-    for (int d = 0; d < 3; ++d) {
-      aj[d] -= o[PairBlock::kFx + d][b];
-      aj[3 + d] -= rj * o[PairBlock::kCx + d][b];
-      if constexpr (kRolling) aj[3 + d] -= o[PairBlock::kRollX + d][b];
-    }
-    aj[6] += o[PairBlock::kTouch][b];
+    Lanes sum = load_lanes(aj) - load_lanes(p) * Lanes{1, 1, 1, rj, rj, rj, -1, 0};
+    if constexpr (kRolling) sum -= Lanes{0, 0, 0, roll[0][b], roll[1][b], roll[2][b], 0, 0};
+    store_lanes(aj, sum);
   };
   sum_rows<kRolling>(
       q, first, last, blk, kin, large, bad, j_side,
-      [&](std::size_t i, const double(&sum)[7]) { std::copy(sum, sum + 7, acc + kAccStride * i); });
+      [&](std::size_t i, const Lanes& sum) { store_lanes(acc + kAccStride * i, sum); });
 }
 
 // Adds to particle a's sum the j sides that later threads left in q.out (pairs from rows at
@@ -214,18 +217,18 @@ template <bool kRolling, bool kAtomic>
 inline void accumulate_shared(const double* kin, const PairList& q, std::size_t first,
                               std::size_t last, PairBlock& blk, double* target,
                               std::uint64_t& large, std::uint32_t& bad) {
-  auto j_side = [&](const double* const* o, std::size_t k, std::size_t b) {
+  auto j_side = [&](const double* p, const double* const* roll, std::size_t k, std::size_t b) {
     const std::uint32_t j = q.j[k];
     const double rj = kin[kKinStride * j + 3];
     double* aj = target + kAccStride * j;
     for (int d = 0; d < 3; ++d) {
-      const double roll = kRolling ? o[PairBlock::kRollX + d][b] : 0.0;
-      add_to<kAtomic>(aj[d], -o[PairBlock::kFx + d][b]);
-      add_to<kAtomic>(aj[3 + d], -(rj * o[PairBlock::kCx + d][b]) - roll);
+      const double rolling = kRolling ? roll[d][b] : 0.0;
+      add_to<kAtomic>(aj[d], -p[PairBlock::kFx + d]);
+      add_to<kAtomic>(aj[3 + d], -(rj * p[PairBlock::kCx + d]) - rolling);
     }
-    add_to<kAtomic>(aj[6], o[PairBlock::kTouch][b]);
+    add_to<kAtomic>(aj[6], p[PairBlock::kTouch]);
   };
-  auto add_row = [&](std::size_t i, const double(&sum)[7]) {
+  auto add_row = [&](std::size_t i, const Lanes& sum) {
     double* ai = target + kAccStride * i;
     for (int f = 0; f < 7; ++f) add_to<kAtomic>(ai[f], sum[f]);
   };
@@ -295,8 +298,9 @@ inline void accumulate_rows(const double* kin, const PairList& q, std::size_t fi
                             std::size_t last, PairBlock& blk, double* acc, std::uint64_t& large,
                             std::uint32_t& bad) {
   sum_rows<kRolling>(
-      q, first, last, blk, kin, large, bad, [](const double* const*, std::size_t, std::size_t) {},
-      [&](std::size_t i, const double(&sum)[7]) { std::copy(sum, sum + 7, acc + kAccStride * i); });
+      q, first, last, blk, kin, large, bad,
+      [](const double*, const double* const*, std::size_t, std::size_t) {},
+      [&](std::size_t i, const Lanes& sum) { store_lanes(acc + kAccStride * i, sum); });
 }
 
 // The full list's j sides: the block's packed j-side pairs (pack_pairs of j_pairs[e0 ..)),

@@ -9,6 +9,7 @@
 
 #include "contactlab/dem/contact_law.hpp"
 #include "contactlab/dem/pair_list.hpp"
+#include "kin_columns.hpp"
 
 namespace contactlab::dem::detail {
 
@@ -89,8 +90,9 @@ struct PairBlock {
     kHz,
     kInputs
   };
-  // Force on i [N], n x F_t [N], 1 if touching with a force, rolling torque on i [N m], 1 if
-  // the overlap is above 1 % / 10 % (flags, not SIMD reductions: those cost a memset a block).
+  // Force on i [N], n x F_t [N], 1 if touching with a force, the overlap flag (0, 1 above
+  // 1 %, 2 above 10 %: one field, not SIMD reductions, which cost a memset a block), rolling
+  // torque on i [N m]. The first kRecordFields go into the pairs' records (to_records).
   enum Output {
     kFx,
     kFy,
@@ -99,13 +101,13 @@ struct PairBlock {
     kCy,
     kCz,
     kTouch,
+    kOverlapFlag,
     kRollX,
     kRollY,
     kRollZ,
-    kLarge,
-    kFailing,
     kOutputs
   };
+  static constexpr std::size_t kRecordFields = 8;
   // The storage is the calling thread's, kept by the engine from step to step (a fresh
   // buffer each step costs page faults and zeroing).
   explicit PairBlock(std::vector<double>& storage) : data(storage) {}
@@ -120,7 +122,34 @@ struct PairBlock {
   }
   double* in(Input f) { return data.data() + f * capacity; }
   double* out(Output f) { return data.data() + (std::size_t{kInputs} + f) * capacity; }
+  // Where to_records puts a pair's record (kRecordFields doubles, a cache line): in the
+  // inputs' storage, dead once the law has run, from its first 64-byte boundary.
+  double* records() {
+    static_assert(kInputs >= kRecordFields + 1, "room for the records and the alignment");
+    const auto misalignment = reinterpret_cast<std::uintptr_t>(data.data()) % 64 / sizeof(double);
+    return data.data() + (misalignment == 0 ? 0 : kRecordFields - misalignment);
+  }
 };
+
+// The law's outputs kFx .. kOverlapFlag of the block's `count` pairs, one record per pair
+// (eight at a time by an in-register transpose): the accumulation then moves a pair with one
+// vector load instead of eight loads from eight fields. Returns the records.
+inline const double* to_records(PairBlock& blk, std::size_t count) {
+  static_assert(PairBlock::kRecordFields == kLanes && PairBlock::kOverlapFlag == kLanes - 1);
+  double* rec = blk.records();
+  const double* o[kLanes];
+  for (std::size_t f = 0; f < kLanes; ++f) o[f] = blk.out(static_cast<PairBlock::Output>(f));
+  std::size_t b = 0;
+  for (; b + kLanes <= count; b += kLanes) {
+    Lanes fields[kLanes], pairs[kLanes];
+    for (std::size_t f = 0; f < kLanes; ++f) fields[f] = load_lanes(o[f] + b);
+    transpose8(fields, pairs);
+    for (std::size_t l = 0; l < kLanes; ++l) store_lanes(rec + kLanes * (b + l), pairs[l]);
+  }
+  for (; b < count; ++b)
+    for (std::size_t f = 0; f < kLanes; ++f) rec[kLanes * b + f] = o[f][b];
+  return rec;
+}
 
 // What the pack reads of a pair's i particle, held in registers over its row.
 struct PackedI {
@@ -176,27 +205,72 @@ inline void pack_pair(const double* kin, const PairList& q, const PackedI& pi, s
   }
 }
 
-// Pack: the rows [first, last) (pairs [rows[first], rows[last])), i's values in registers,
-// j's from its kin block, into the block's inputs.
+// Pairs k .. k + 7 into the block at b .. b + 7, as pack_pair would (the same operations on
+// the same values, lane by lane), from both particles' kin blocks as columns.
+template <bool kRolling>
+[[gnu::always_inline]] inline void pack_eight(const double* kin, const PairList& q, std::size_t k,
+                                              std::size_t b, const PackTargets& t) {
+  const KinColumns pi = kin_columns(kin, kKinStride, q.i.data() + k);
+  const KinColumns pj = kin_columns(kin, kKinStride, q.j.data() + k);
+  Lanes dx = pi.x - pj.x, dy = pi.y - pj.y, dz = pi.z - pj.z;
+  // Periodic images are rare (pairs across a periodic side): x - 0 is x, so skipping the
+  // zero shift of eight plain pairs changes no bit.
+  std::uint64_t images;
+  std::memcpy(&images, q.image.data() + k, sizeof images);
+  if (images != 0x0101010101010101u * kNoImage) [[unlikely]] {
+    Lanes sx, sy, sz;
+    for (std::size_t l = 0; l < kLanes; ++l) {
+      const auto& sh = q.shift[q.image[k + l]];
+      sx[l] = sh[0];
+      sy[l] = sh[1];
+      sz[l] = sh[2];
+    }
+    dx -= sx;
+    dy -= sy;
+    dz -= sz;
+  }
+  store_lanes(t.f[PairBlock::kDx] + b, dx);
+  store_lanes(t.f[PairBlock::kDy] + b, dy);
+  store_lanes(t.f[PairBlock::kDz] + b, dz);
+  store_lanes(t.f[PairBlock::kRr] + b, pi.r + pj.r);
+  store_lanes(t.f[PairBlock::kRmin] + b, pj.r < pi.r ? pj.r : pi.r);
+  store_lanes(t.f[PairBlock::kMi] + b, pi.m);
+  store_lanes(t.f[PairBlock::kMj] + b, pj.m);
+  store_lanes(t.f[PairBlock::kDvx] + b, pi.vx - pj.vx);
+  store_lanes(t.f[PairBlock::kDvy] + b, pi.vy - pj.vy);
+  store_lanes(t.f[PairBlock::kDvz] + b, pi.vz - pj.vz);
+  store_lanes(t.f[PairBlock::kSx] + b, pi.r * pi.wx + pj.r * pj.wx);
+  store_lanes(t.f[PairBlock::kSy] + b, pi.r * pi.wy + pj.r * pj.wy);
+  store_lanes(t.f[PairBlock::kSz] + b, pi.r * pi.wz + pj.r * pj.wz);
+  if constexpr (kRolling) {
+    store_lanes(t.f[PairBlock::kDwx] + b, pi.wx - pj.wx);
+    store_lanes(t.f[PairBlock::kDwy] + b, pi.wy - pj.wy);
+    store_lanes(t.f[PairBlock::kDwz] + b, pi.wz - pj.wz);
+    store_lanes(t.f[PairBlock::kRprod] + b, pi.r * pj.r);
+  }
+}
+
+// Pack: the rows [first, last) (pairs [rows[first], rows[last])) into the block's inputs,
+// eight pairs at a time (pack_eight), the last few one by one.
 template <bool kRolling>
 inline void pack_rows(const double* kin, const PairList& q, std::size_t first, std::size_t last,
                       PairBlock& blk, const double* acc) {
-  const std::size_t k0 = q.rows[first];
+  const std::size_t k0 = q.rows[first], k1 = q.rows[last];
   const PackTargets t(blk);
-  for (std::size_t i = first; i < last; ++i) {
-    const PackedI pi(kin + kKinStride * i);
-    for (std::size_t k = q.rows[i]; k < q.rows[i + 1]; ++k) {
-      // Partners lie up to max_span particles back (L2 or beyond, out of reach of the hardware
-      // prefetcher): fetch the kin block and the sums of the partner a few pairs ahead.
-      if (k + kPartnerAhead < q.j.size()) {
-        const std::size_t ahead = q.j[k + kPartnerAhead];
-        __builtin_prefetch(kin + kKinStride * ahead);
-        __builtin_prefetch(kin + kKinStride * ahead + kKinStride - 1);
-        __builtin_prefetch(acc + kAccStride * ahead, 1);
-      }
-      pack_pair<kRolling>(kin, q, pi, k, k - k0, t);
+  std::size_t k = k0;
+  for (; k + kLanes <= k1; k += kLanes) {
+    // Partners lie up to max_span particles back (L2 or beyond, out of reach of the hardware
+    // prefetcher): fetch the next eight partners' kin blocks and sums.
+    for (std::size_t a = k + kPartnerAhead; a < std::min(k + kPartnerAhead + kLanes, q.j.size());
+         ++a) {
+      const std::size_t ahead = q.j[a];
+      __builtin_prefetch(kin + kKinStride * ahead);
+      __builtin_prefetch(kin + kKinStride * ahead + kKinStride - 1);
+      __builtin_prefetch(acc + kAccStride * ahead, 1);
     }
+    pack_eight<kRolling>(kin, q, k, k - k0, t);
   }
+  for (; k < k1; ++k) pack_pair<kRolling>(kin, q, PackedI(kin + kKinStride * q.i[k]), k, k - k0, t);
 }
 
 // Pack: the pairs pairs[0 .. count) in that order (e.g. a particle's j sides, for the full
@@ -288,8 +362,7 @@ inline void pair_law(const PairCoefficients& c, double dt, std::size_t count, Pa
   double* hz = springs.out_z;
   const double k_abs = c.k_abs, k_per_mass = c.k_per_mass, c_per_mass = c.c_per_mass;
   const double kt_ratio = c.kt_ratio, ct_ratio = c.ct_ratio, mu = c.mu, mu_roll = c.mu_roll;
-  double* __restrict out_large = blk.out(PairBlock::kLarge);
-  double* __restrict out_failing = blk.out(PairBlock::kFailing);
+  double* __restrict out_flag = blk.out(PairBlock::kOverlapFlag);
 #pragma omp simd
   for (std::uint32_t b = 0; b < static_cast<std::uint32_t>(count); ++b) {
     const double rr = rr_in[b];
@@ -298,8 +371,8 @@ inline void pair_law(const PairCoefficients& c, double dt, std::size_t count, Pa
     const double dist = std::sqrt(rsq), inv = 1.0 / dist;
     const double nx = dx[b] * inv, ny = dy[b] * inv, nz = dz[b] * inv;
     const double delta = rr - dist;
-    out_large[b] = touch & (delta > kWarnFraction * rmin[b]) ? 1.0 : 0.0;
-    out_failing[b] = touch & (delta > kFailFraction * rmin[b]) ? 1.0 : 0.0;
+    const double flag = delta > kFailFraction * rmin[b] ? 2.0 : 1.0;
+    out_flag[b] = touch & (delta > kWarnFraction * rmin[b]) ? flag : 0.0;
     const double m_star = mi[b] * mj[b] / (mi[b] + mj[b]);
     // Relative velocity of the contact point: v_i - v_j - (r_i w_i + r_j w_j) x n.
     const double sx = sx_in[b], sy = sy_in[b], sz = sz_in[b];

@@ -33,9 +33,9 @@ struct PairList {
   std::vector<double> hx_next, hy_next, hz_next;
   // Per pair, in pair order, written by the force pass (zero while apart), kOutStride doubles
   // a pair, one cache line: the force on i [N] (j gets minus it), n x F_t [N] (i's torque is
-  // -r_i times it, j's -r_j times it), 1 if touching (else 0), unused. With rolling resistance,
-  // roll_*: the rolling torque on i [N m] (j gets minus it). A particle's gather reads its own
-  // row's run and its j sides through j_pairs, in a fixed order.
+  // -r_i times it, j's -r_j times it), 1 if touching (else 0), the overlap flag (not read here).
+  // With rolling resistance, roll_*: the rolling torque on i [N m] (j gets minus it). A particle's
+  // gather reads its own row's run and its j sides through j_pairs, in a fixed order.
   static constexpr std::size_t kOutStride = 8;
   std::vector<double> out, roll_x, roll_y, roll_z;
   // Pairs run from the later particle to the earlier (j < i) and are grouped by i, ascending:

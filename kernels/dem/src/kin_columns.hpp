@@ -1,0 +1,92 @@
+// Eight particles' kinematics blocks as columns (the x of all eight, their y, ...), by two
+// vector loads per block and in-register 8x8 transposes (private to src/). The pair pack uses
+// it to fill eight lanes of a field with one store: eleven scalar loads and one scalar store per
+// field and pair cost more than the pair law itself. GCC vector extensions: AVX-512 shuffles
+// where -march allows, narrower vectors elsewhere, the same values on every target.
+#pragma once
+
+#include <cstdint>
+#include <cstring>
+
+// Without AVX-512, GCC notes that 64-byte vectors are passed differently (-Wpsabi): nothing
+// here crosses a translation unit compiled with other flags (inline, private to src/).
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wpsabi"
+
+namespace contactlab::dem::detail {
+
+using Lanes = double __attribute__((vector_size(64)));
+using LaneIndex = std::int64_t __attribute__((vector_size(64)));
+constexpr std::size_t kLanes = 8;
+
+inline Lanes load_lanes(const double* p) {
+  Lanes v;
+  std::memcpy(&v, p, sizeof v);
+  return v;
+}
+inline void store_lanes(double* p, const Lanes& v) { std::memcpy(p, &v, sizeof v); }
+
+// Rows r[0..7] of eight doubles in, their columns out (c[k][l] = r[l][k]).
+[[gnu::always_inline]] inline void transpose8(const Lanes (&r)[8], Lanes (&c)[8]) {
+  constexpr LaneIndex kEven{0, 8, 2, 10, 4, 12, 6, 14}, kOdd{1, 9, 3, 11, 5, 13, 7, 15};
+  constexpr LaneIndex kPairLo{0, 1, 8, 9, 4, 5, 12, 13}, kPairHi{2, 3, 10, 11, 6, 7, 14, 15};
+  constexpr LaneIndex kHalfLo{0, 1, 2, 3, 8, 9, 10, 11}, kHalfHi{4, 5, 6, 7, 12, 13, 14, 15};
+  Lanes t[8], u[8];
+  for (int p = 0; p < 8; p += 2) {
+    t[p] = __builtin_shuffle(r[p], r[p + 1], kEven);  // columns 0, 2, 4, 6 of rows p, p + 1
+    t[p + 1] = __builtin_shuffle(r[p], r[p + 1], kOdd);
+  }
+  for (int h = 0; h < 8; h += 4) {  // rows h .. h + 3: columns (0, 4), (1, 5), (2, 6), (3, 7)
+    u[h] = __builtin_shuffle(t[h], t[h + 2], kPairLo);
+    u[h + 1] = __builtin_shuffle(t[h + 1], t[h + 3], kPairLo);
+    u[h + 2] = __builtin_shuffle(t[h], t[h + 2], kPairHi);
+    u[h + 3] = __builtin_shuffle(t[h + 1], t[h + 3], kPairHi);
+  }
+  for (int k = 0; k < 4; ++k) {
+    c[k] = __builtin_shuffle(u[k], u[k + 4], kHalfLo);
+    c[k + 4] = __builtin_shuffle(u[k], u[k + 4], kHalfHi);
+  }
+}
+
+// The kinematics of eight particles, a field per vector (the kin block's layout: x, y, z, r,
+// pvx, pvy, pvz, m, pwx, pwy, pwz, unused).
+struct KinColumns {
+  Lanes x, y, z, r, vx, vy, vz, m, wx, wy, wz;
+};
+
+// The spins (columns 0..2 of rows r[0..7], four doubles each at the top of the vectors) as
+// columns: 11 shuffles, not a full transpose's 24 for three of its eight columns.
+[[gnu::always_inline]] inline void spin_columns(const Lanes (&r)[8], Lanes& wx, Lanes& wy,
+                                                Lanes& wz) {
+  constexpr LaneIndex kTops{4, 5, 6, 7, 12, 13, 14, 15};
+  constexpr LaneIndex kEven{0, 8, 2, 10, 4, 12, 6, 14}, kOdd{1, 9, 3, 11, 5, 13, 7, 15};
+  constexpr LaneIndex kPairLo{0, 1, 8, 9, 4, 5, 12, 13}, kPairHi{2, 3, 10, 11, 6, 7, 14, 15};
+  Lanes q[4];  // rows p and p + 4, side by side
+  for (int p = 0; p < 4; ++p) q[p] = __builtin_shuffle(r[p], r[p + 4], kTops);
+  const Lanes even01 = __builtin_shuffle(q[0], q[1], kEven);  // wx0 wx1 wz0 wz1 wx4 wx5 wz4 wz5
+  const Lanes odd01 = __builtin_shuffle(q[0], q[1], kOdd);    // wy0 wy1 .. .. wy4 wy5 .. ..
+  const Lanes even23 = __builtin_shuffle(q[2], q[3], kEven);
+  const Lanes odd23 = __builtin_shuffle(q[2], q[3], kOdd);
+  wx = __builtin_shuffle(even01, even23, kPairLo);
+  wz = __builtin_shuffle(even01, even23, kPairHi);
+  wy = __builtin_shuffle(odd01, odd23, kPairLo);
+}
+
+// The blocks of particles index[0..7], `stride` doubles apart from kin.
+[[gnu::always_inline]] inline KinColumns kin_columns(const double* kin, std::size_t stride,
+                                                     const std::uint32_t* index) {
+  Lanes head[8], tail[8], c[8];
+  for (std::size_t l = 0; l < kLanes; ++l) {
+    const double* block = kin + stride * index[l];
+    head[l] = load_lanes(block);      // x .. m
+    tail[l] = load_lanes(block + 4);  // pvx .. unused (only the spins are kept)
+  }
+  transpose8(head, c);
+  KinColumns k{c[0], c[1], c[2], c[3], c[4], c[5], c[6], c[7], {}, {}, {}};
+  spin_columns(tail, k.wx, k.wy, k.wz);
+  return k;
+}
+
+}  // namespace contactlab::dem::detail
+
+#pragma GCC diagnostic pop
