@@ -11,6 +11,7 @@
 
 #include "contactlab/kernels/error.hpp"
 #include "force_pass.hpp"
+#include "particle_finish.hpp"
 
 namespace contactlab::dem {
 using detail::kFailFraction;
@@ -352,39 +353,19 @@ void Engine::compute_forces(bool final_kick) {
     double* sum = acc + detail::kAccStride * a;
     add_walls(a, sum[0], sum[1], sum[2], sum[3], sum[4], sum[5], sum[6], large_here, bad_wall_here);
   };
-  // A particle's finish: its sums (pairs, and its walls unless they were added already),
-  // gravity, drag, kick.
-  auto finish = [&](std::size_t a, bool with_walls, std::uint64_t& large_here,
+  // The particles [first, last)'s finish: their walls into their sums (unless added
+  // already), then the sums, gravity, drag and kick over the range (finish_particles).
+  const detail::FinishTerms terms{
+      settings_.viscous_damping,
+      {settings_.gravity[0], settings_.gravity[1], settings_.gravity[2]},
+      half,
+      final_kick};
+  auto finish = [&](std::size_t first, std::size_t last, bool with_walls, std::uint64_t& large_here,
                     std::uint32_t& bad_wall_here) {
-    const double* ka = &kin_[kKinStride * a];
-    const double mass = ka[7], pvxa = ka[4], pvya = ka[5], pvza = ka[6];
-    const double* sum = acc + detail::kAccStride * a;
-    double fx = sum[0], fy = sum[1], fz = sum[2], tx = sum[3], ty = sum[4], tz = sum[5];
-    double touching = sum[6];  // exact: a sum of ones
-    if (with_walls) add_walls(a, fx, fy, fz, tx, ty, tz, touching, large_here, bad_wall_here);
-    p.contacts[a] = static_cast<std::uint16_t>(touching);
-    p.force_magnitude[a] = std::sqrt(fx * fx + fy * fy + fz * fz);
-    // Optional background drag (settling only): F = -c v with the synchronised velocity.
-    fx -= settings_.viscous_damping * pvxa;
-    fy -= settings_.viscous_damping * pvya;
-    fz -= settings_.viscous_damping * pvza;
-    fx += mass * settings_.gravity[0];
-    fy += mass * settings_.gravity[1];
-    fz += mass * settings_.gravity[2];
-    p.fx[a] = fx;
-    p.fy[a] = fy;
-    p.fz[a] = fz;
-    p.tx[a] = tx;
-    p.ty[a] = ty;
-    p.tz[a] = tz;
-    if (final_kick) {
-      p.vx[a] += fx * p.inv_mass[a] * half;
-      p.vy[a] += fy * p.inv_mass[a] * half;
-      p.vz[a] += fz * p.inv_mass[a] * half;
-      p.wx[a] += tx * p.inv_inertia[a] * half;
-      p.wy[a] += ty * p.inv_inertia[a] * half;
-      p.wz[a] += tz * p.inv_inertia[a] * half;
+    if (with_walls) {
+      for (std::size_t a = first; a < last; ++a) walls(a, large_here, bad_wall_here);
     }
+    detail::finish_particles(kin_.data(), acc, p, terms, first, last);
   };
   const double* kin = kin_.data();
   // Phase ends as thread 0 sees them (after barriers, so the same for all threads).

@@ -127,14 +127,14 @@ inline void accumulate_deferred(const double* kin, const PairList& q, std::size_
 
 // The force pass: each thread takes a contiguous range of rows [b, e), computes them a block
 // at a time (pack_rows, pair_law on SIMD lanes, accumulate_ordered) and
-// finishes particle a (finish(a, with_walls, large, bad_wall): walls unless serial_walls, when
-// walls(a, ...) adds them for every particle in one thread first; gravity, kick) as soon
-// as the rows holding its j sides, (a, a + lag], are done; lag = max_span finishes particles
-// while their sums are still in cache (fused), lag = n finishes every particle after the
-// barrier (split: the pair phase timed alone). mark(phase) is called by every thread where a
-// phase ends (after the pairs, the j sides from other threads, the serial walls). The last
-// max_span particles of a range wait for the next range's rows, after a barrier. A particle's
-// sums do not depend on when it is finished, so the result is the same for any thread count.
+// finishes particles [a, z) (finish(a, z, with_walls, large, bad_wall): walls unless serial_walls,
+// when walls(a, ...) adds them for every particle in one thread first; gravity, kick) as soon as
+// the rows holding its j sides, (a, a + lag], are done; lag = max_span finishes particles while
+// their sums are still in cache (fused), lag = n finishes every particle after the barrier (split:
+// the pair phase timed alone). mark(phase) is called by every thread where a phase ends (after the
+// pairs, the j sides from other threads, the serial walls). The last max_span particles of a range
+// wait for the next range's rows, after a barrier. A particle's sums do not depend on when it is
+// finished, so the result is the same for any thread count.
 template <bool kRolling, bool kClamp, class Finish, class Walls, class Mark>
 void force_pass(const double* kin, std::size_t n, PairList& q, const PairCoefficients& c, double dt,
                 bool fused, bool serial_walls, double* acc, std::vector<double>& scratch,
@@ -155,7 +155,10 @@ void force_pass(const double* kin, std::size_t n, PairList& q, const PairCoeffic
     pack_rows<kRolling>(kin, q, first, last, blk, acc);
     pair_law<kRolling, kClamp>(c, dt, k1 - k0, blk, SpringView::in_place(q, k0));
     accumulate_ordered<kRolling>(kin, q, first, last, blk, b, acc, large_here, bad_here);
-    for (; next + lag < last; ++next) finish(next, true, large_here, bad_wall_here);
+    if (next + lag < last) {
+      finish(next, last - lag, true, large_here, bad_wall_here);
+      next = last - lag;
+    }
   }
 #pragma omp barrier
   mark(Phase::kPairs);
@@ -169,7 +172,7 @@ void force_pass(const double* kin, std::size_t n, PairList& q, const PairCoeffic
     for (std::size_t a = 0; a < n; ++a) walls(a, large_here, bad_wall_here);
     mark(Phase::kWalls);
   }
-  for (; next < e; ++next) finish(next, !serial_walls, large_here, bad_wall_here);
+  if (next < e) finish(next, e, !serial_walls, large_here, bad_wall_here);
   combine_counts(large_here, bad_here, large, bad_pair);
   combine_counts(0, bad_wall_here, large, bad_wall);
 }
@@ -187,14 +190,14 @@ inline void for_each_block(std::size_t n, Body&& body) {
   }
 }
 
-// The update (finish(a, with_walls, ...)) over the same blocks of particles as the pairs, by
-// the variant's schedule (a chunk of k is k blocks in both loops; per particle, dynamic,1
-// would pay a scheduling round trip per particle).
+// The update (finish(first, last, with_walls, ...)) over the same blocks of particles as the pairs,
+// by the variant's schedule (a chunk of k is k blocks in both loops; per particle, dynamic,1 would
+// pay a scheduling round trip per particle).
 template <class Finish>
 inline void update_blocks(std::size_t n, bool serial_walls, Finish& finish,
                           std::uint64_t& large_here, std::uint32_t& bad_wall_here) {
   for_each_block(n, [&](std::size_t first, std::size_t last) {
-    for (std::size_t a = first; a < last; ++a) finish(a, !serial_walls, large_here, bad_wall_here);
+    finish(first, last, !serial_walls, large_here, bad_wall_here);
   });
 #pragma omp barrier
 }
@@ -238,7 +241,7 @@ inline void accumulate_shared(const double* kin, const PairList& q, std::size_t 
 // The force pass of the non-ordered accumulations (per-thread arrays, atomics): blocks of rows
 // shared out by the variant's schedule (`omp for schedule(runtime)`: the caller sets it), then
 // the per-thread arrays summed in thread order, the walls by one thread when serial_walls, and
-// the update (finish(a, with_walls, ...)) over the same blocks by the same schedule.
+// the update (finish(first, last, with_walls, ...)) over the same blocks by the same schedule.
 template <bool kRolling, bool kClamp, class Finish, class Walls, class Mark>
 void force_pass_shared(const double* kin, std::size_t n, PairList& q, const PairCoefficients& c,
                        double dt, bool atomic, bool serial_walls, double* acc,
@@ -352,7 +355,7 @@ void force_pass_full(const double* kin, std::size_t n, PairList& q, const PairCo
     pair_law<kRolling, kClamp>(c, dt, e1 - e0, blk, SpringView::gathered(blk));
     accumulate_j_sides<kRolling>(kin, q, first, last, blk, acc);
     if (fused) {
-      for (std::size_t a = first; a < last; ++a) finish(a, true, large_here, bad_wall_here);
+      finish(first, last, true, large_here, bad_wall_here);
     }
   });
 #pragma omp barrier

@@ -5,6 +5,7 @@
 // where -march allows, narrower vectors elsewhere, the same values on every target.
 #pragma once
 
+#include <cmath>
 #include <cstdint>
 #include <cstring>
 
@@ -54,22 +55,35 @@ struct KinColumns {
   Lanes x, y, z, r, vx, vy, vz, m, wx, wy, wz;
 };
 
-// The spins (columns 0..2 of rows r[0..7], four doubles each at the top of the vectors) as
-// columns: 11 shuffles, not a full transpose's 24 for three of its eight columns.
-[[gnu::always_inline]] inline void spin_columns(const Lanes (&r)[8], Lanes& wx, Lanes& wy,
-                                                Lanes& wz) {
+// Columns 0..3 of the top halves of rows r[0..7] (lanes 4..7 of each): 12 shuffles, not a
+// full transpose's 24 for half of its columns.
+[[gnu::always_inline]] inline void top_columns(const Lanes (&r)[8], Lanes& c0, Lanes& c1, Lanes& c2,
+                                               Lanes& c3) {
   constexpr LaneIndex kTops{4, 5, 6, 7, 12, 13, 14, 15};
   constexpr LaneIndex kEven{0, 8, 2, 10, 4, 12, 6, 14}, kOdd{1, 9, 3, 11, 5, 13, 7, 15};
   constexpr LaneIndex kPairLo{0, 1, 8, 9, 4, 5, 12, 13}, kPairHi{2, 3, 10, 11, 6, 7, 14, 15};
-  Lanes q[4];  // rows p and p + 4, side by side
+  Lanes q[4];  // the tops of rows p and p + 4, side by side
   for (int p = 0; p < 4; ++p) q[p] = __builtin_shuffle(r[p], r[p + 4], kTops);
-  const Lanes even01 = __builtin_shuffle(q[0], q[1], kEven);  // wx0 wx1 wz0 wz1 wx4 wx5 wz4 wz5
-  const Lanes odd01 = __builtin_shuffle(q[0], q[1], kOdd);    // wy0 wy1 .. .. wy4 wy5 .. ..
+  const Lanes even01 = __builtin_shuffle(q[0], q[1], kEven);  // c0 of 0 1, c2 of 0 1, c0 of 4 5, ..
+  const Lanes odd01 = __builtin_shuffle(q[0], q[1], kOdd);    // c1 of 0 1, c3 of 0 1, ..
   const Lanes even23 = __builtin_shuffle(q[2], q[3], kEven);
   const Lanes odd23 = __builtin_shuffle(q[2], q[3], kOdd);
-  wx = __builtin_shuffle(even01, even23, kPairLo);
-  wz = __builtin_shuffle(even01, even23, kPairHi);
-  wy = __builtin_shuffle(odd01, odd23, kPairLo);
+  c0 = __builtin_shuffle(even01, even23, kPairLo);
+  c2 = __builtin_shuffle(even01, even23, kPairHi);
+  c1 = __builtin_shuffle(odd01, odd23, kPairLo);
+  c3 = __builtin_shuffle(odd01, odd23, kPairHi);
+}
+
+// The square roots of eight lanes (a loop the compiler turns into one vector sqrt: GCC's
+// vector extensions have no sqrt of their own; the same IEEE result as std::sqrt per lane).
+[[gnu::always_inline]] inline Lanes sqrt_lanes(const Lanes& v) {
+  double in[kLanes], out[kLanes];
+  std::memcpy(in, &v, sizeof in);
+#pragma omp simd
+  for (std::size_t l = 0; l < kLanes; ++l) out[l] = std::sqrt(in[l]);
+  Lanes r;
+  std::memcpy(&r, out, sizeof r);
+  return r;
 }
 
 // The blocks of particles index[0..7], `stride` doubles apart from kin.
@@ -83,7 +97,8 @@ struct KinColumns {
   }
   transpose8(head, c);
   KinColumns k{c[0], c[1], c[2], c[3], c[4], c[5], c[6], c[7], {}, {}, {}};
-  spin_columns(tail, k.wx, k.wy, k.wz);
+  Lanes unused;
+  top_columns(tail, k.wx, k.wy, k.wz, unused);
   return k;
 }
 
