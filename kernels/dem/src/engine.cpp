@@ -11,7 +11,7 @@
 
 #include "contactlab/kernels/error.hpp"
 #include "force_pass.hpp"
-#include "particle_finish.hpp"
+#include "particle_update.hpp"
 
 namespace contactlab::dem {
 using detail::kFailFraction;
@@ -180,34 +180,16 @@ void Engine::step() {
   double t0 = omp_get_wtime();
   double max_disp_sq = 0.0;
   std::uint32_t bad = UINT32_MAX;  // the first particle that moved too far or is not finite
-#pragma omp parallel for schedule(static) num_threads(settings_.threads) reduction(max            \
-                                                                                   : max_disp_sq) \
-    reduction(min                                                                                 \
-              : bad)
-  for (std::size_t k = 0; k < n; ++k) {
-    const Accelerations a = accelerations(p, k);
-    const auto [ax, ay, az, bx, by, bz] = a;
-    p.vx[k] += ax * half;
-    p.vy[k] += ay * half;
-    p.vz[k] += az * half;
-    p.wx[k] += bx * half;
-    p.wy[k] += by * half;
-    p.wz[k] += bz * half;
-    const double mx = p.vx[k] * dt, my = p.vy[k] * dt, mz = p.vz[k] * dt;
-    p.x[k] += mx;
-    p.y[k] += my;
-    p.z[k] += mz;
-    double* kin = &kin_[kKinStride * k];
-    kin[0] = p.x[k];
-    kin[1] = p.y[k];
-    kin[2] = p.z[k];
-    predict_velocities(p, k, a, kick, kin);
-    const double ddx = p.x[k] - p.x0[k], ddy = p.y[k] - p.y0[k], ddz = p.z[k] - p.z0[k];
-    max_disp_sq = std::max(max_disp_sq, ddx * ddx + ddy * ddy + ddz * ddz);
-    const double step_sq = mx * mx + my * my + mz * mz;
-    if (!(step_sq <= move_limit_sq) || !std::isfinite(p.x[k] + p.y[k] + p.z[k])) {
-      bad = std::min(bad, static_cast<std::uint32_t>(k));
-    }
+  const detail::DriftTerms terms{dt, half, kick, move_limit_sq};
+  // Each thread drifts the particles whose rows it takes in the force pass (n t / T ..).
+#pragma omp parallel num_threads(settings_.threads) reduction(max                          \
+                                                              : max_disp_sq) reduction(min \
+                                                                                       : bad)
+  {
+    const auto t = static_cast<std::size_t>(omp_get_thread_num());
+    const auto threads = static_cast<std::size_t>(omp_get_num_threads());
+    detail::drift_particles(p, kin_.data(), terms, n * t / threads, n * (t + 1) / threads,
+                            max_disp_sq, bad);
   }
   // Time from the last (re)start's base: exact multiples of dt, also after a dt change.
   time_s_ = base_time_s_ + static_cast<double>(step_ + 1 - base_step_) * dt;

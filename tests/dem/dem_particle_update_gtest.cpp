@@ -1,0 +1,138 @@
+// The per-particle passes (private to the engine, src/particle_update.hpp): eight particles at
+// a time gives every array bit for bit what one particle at a time gives (the engine's thread
+// count moves where ranges start): the finish with and without the final kick, drag and
+// gravity; the drift with its kinematics blocks, largest displacement and first bad particle.
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <limits>
+#include <random>
+#include <vector>
+
+#include "particle_update.hpp"
+
+namespace contactlab::dem::detail {
+namespace {
+
+Particles random_particles(std::size_t n, std::mt19937_64& rng) {
+  std::uniform_real_distribution<double> u(-1.0, 1.0), positive(0.5, 2.0);
+  Particles p;
+  for (auto* v : {&p.vx, &p.vy, &p.vz, &p.wx, &p.wy, &p.wz, &p.fx, &p.fy, &p.fz, &p.tx, &p.ty,
+                  &p.tz, &p.force_magnitude}) {
+    v->resize(n);
+    for (double& x : *v) x = u(rng);
+  }
+  for (auto* v : {&p.x, &p.y, &p.z, &p.x0, &p.y0, &p.z0}) {
+    v->resize(n);
+    for (double& x : *v) x = 1e-3 * u(rng);
+  }
+  for (auto* v : {&p.inv_mass, &p.inv_inertia, &p.radius, &p.mass}) {
+    v->resize(n);
+    for (double& x : *v) x = positive(rng);
+  }
+  p.contacts.assign(n, 0);
+  return p;
+}
+
+bool same_bits(const std::vector<double>& a, const std::vector<double>& b) {
+  return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(double)) == 0;
+}
+
+void expect_ranges_agree(const FinishTerms& terms) {
+  const std::size_t n = 203;  // not a multiple of eight
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  std::vector<double> kin(kKinStride * n), acc(kAccStride * n);
+  for (double& x : kin) x = u(rng);
+  for (double& x : acc) x = u(rng);
+  for (std::size_t a = 0; a < n; ++a) {
+    kin[kKinStride * a + 7] = 1.0 + 0.5 * u(rng);               // mass
+    acc[kAccStride * a + 6] = static_cast<double>(rng() % 12);  // touching contacts
+  }
+  const Particles start = random_particles(n, rng);
+  Particles whole = start, one_by_one = start;
+  finish_particles(kin.data(), acc.data(), whole, terms, 0, n);
+  for (std::size_t a = 0; a < n; ++a)
+    finish_particles(kin.data(), acc.data(), one_by_one, terms, a, a + 1);
+  EXPECT_EQ(whole.contacts, one_by_one.contacts);
+  EXPECT_TRUE(same_bits(whole.force_magnitude, one_by_one.force_magnitude));
+  for (auto member : {&Particles::fx, &Particles::fy, &Particles::fz, &Particles::tx,
+                      &Particles::ty, &Particles::tz, &Particles::vx, &Particles::vy,
+                      &Particles::vz, &Particles::wx, &Particles::wy, &Particles::wz}) {
+    EXPECT_TRUE(same_bits(whole.*member, one_by_one.*member));
+  }
+  EXPECT_NE(whole.vx, start.vx) << "the kick must have moved something";
+}
+
+TEST(DemParticleUpdate, FinishEightAtATimeMatchesOneByOne) {
+  expect_ranges_agree({0.3, {0.1, -0.2, -9.81}, 1e-5, true});
+  expect_ranges_agree({0.0, {0.0, 0.0, -9.81}, 2e-6, true});
+}
+
+TEST(DemParticleUpdate, FinishWithoutKickVelocitiesStay) {
+  const std::size_t n = 16;
+  std::mt19937_64 rng(3);
+  std::vector<double> kin(kKinStride * n, 1.0), acc(kAccStride * n, 0.5);
+  Particles p = random_particles(n, rng);
+  const std::vector<double> vx = p.vx;
+  finish_particles(kin.data(), acc.data(), p, {0.0, {0.0, 0.0, -9.81}, 1e-5, false}, 0, n);
+  EXPECT_EQ(p.vx, vx);
+  EXPECT_EQ(p.contacts[3], 0);  // 0.5 touching truncates to 0
+  EXPECT_DOUBLE_EQ(p.fz[5], 0.5 - 9.81);
+}
+
+struct Drifted {
+  Particles p;
+  std::vector<double> kin;
+  double max_disp_sq = 0.0;
+  std::uint32_t bad = UINT32_MAX;
+};
+
+// Drifts `start` over [0, n) at once or one particle at a time.
+Drifted drift(const Particles& start, const DriftTerms& terms, bool one_by_one) {
+  Drifted d{start, std::vector<double>(kKinStride * start.x.size(), -1.0)};
+  const std::size_t n = start.x.size();
+  if (!one_by_one) {
+    drift_particles(d.p, d.kin.data(), terms, 0, n, d.max_disp_sq, d.bad);
+  } else {
+    for (std::size_t a = 0; a < n; ++a)
+      drift_particles(d.p, d.kin.data(), terms, a, a + 1, d.max_disp_sq, d.bad);
+  }
+  return d;
+}
+
+TEST(DemParticleUpdate, DriftEightAtATimeMatchesOneByOne) {
+  std::mt19937_64 rng(5);
+  const Particles start = random_particles(203, rng);
+  const DriftTerms terms{2e-6, 1e-6, 1e-6, 1.0};
+  const Drifted whole = drift(start, terms, false), single = drift(start, terms, true);
+  EXPECT_TRUE(same_bits(whole.kin, single.kin));
+  for (auto member : {&Particles::x, &Particles::y, &Particles::z, &Particles::vx, &Particles::vy,
+                      &Particles::vz, &Particles::wx, &Particles::wy, &Particles::wz}) {
+    EXPECT_TRUE(same_bits(whole.p.*member, single.p.*member));
+  }
+  EXPECT_EQ(whole.max_disp_sq, single.max_disp_sq);
+  EXPECT_GT(whole.max_disp_sq, 0.0);
+  EXPECT_EQ(whole.bad, UINT32_MAX);
+  EXPECT_EQ(whole.kin[kKinStride * 17 + 3], start.radius[17]);
+  EXPECT_EQ(whole.kin[kKinStride * 17 + 11], 0.0);
+}
+
+TEST(DemParticleUpdate, DriftReportsTheFirstBadParticle) {
+  std::mt19937_64 rng(6);
+  Particles start = random_particles(40, rng);
+  const DriftTerms terms{2e-6, 1e-6, 1e-6, 1e-10};  // moves up to 1e-5 m
+  start.vx[29] = 10.0;                              // moves 2e-5 m: past the limit
+  EXPECT_EQ(drift(start, terms, false).bad, 29u);
+  start.x[21] = std::numeric_limits<double>::quiet_NaN();  // not finite, earlier
+  EXPECT_EQ(drift(start, terms, false).bad, 21u);
+  EXPECT_EQ(drift(start, terms, true).bad, 21u);
+  start.y[38] = std::numeric_limits<double>::infinity();  // in the scalar tail, later
+  EXPECT_EQ(drift(start, terms, false).bad, 21u);
+  start.x[21] = 0.0;
+  start.vx[29] = 0.0;
+  EXPECT_EQ(drift(start, terms, false).bad, 38u);
+}
+
+}  // namespace
+}  // namespace contactlab::dem::detail
