@@ -27,6 +27,15 @@ inline Lanes load_lanes(const double* p) {
 }
 inline void store_lanes(double* p, const Lanes& v) { std::memcpy(p, &v, sizeof v); }
 
+// Whether any lane of a comparison's mask is set, or false.
+[[gnu::always_inline]] inline bool any_set(LaneIndex m) {
+  m |= __builtin_shuffle(m, LaneIndex{4, 5, 6, 7, 0, 1, 2, 3});
+  m |= __builtin_shuffle(m, LaneIndex{2, 3, 0, 1, 6, 7, 4, 5});
+  m |= __builtin_shuffle(m, LaneIndex{1, 0, 3, 2, 5, 4, 7, 6});
+  return m[0] != 0;
+}
+[[gnu::always_inline]] inline bool any_false(LaneIndex m) { return any_set(~m); }
+
 // Rows r[0..7] of eight doubles in, their columns out (c[k][l] = r[l][k]).
 [[gnu::always_inline]] inline void transpose8(const Lanes (&r)[8], Lanes (&c)[8]) {
   constexpr LaneIndex kEven{0, 8, 2, 10, 4, 12, 6, 14}, kOdd{1, 9, 3, 11, 5, 13, 7, 15};

@@ -124,14 +124,6 @@ struct DriftTerms {
   double move_limit_sq;  // (skin/2)^2 [m^2]: a longer move in one step fails the run
 };
 
-// Whether any lane of a comparison's mask is false.
-[[gnu::always_inline]] inline bool any_false(LaneIndex m) {
-  m &= __builtin_shuffle(m, LaneIndex{4, 5, 6, 7, 0, 1, 2, 3});
-  m &= __builtin_shuffle(m, LaneIndex{2, 3, 0, 1, 6, 7, 4, 5});
-  m &= __builtin_shuffle(m, LaneIndex{1, 0, 3, 2, 5, 4, 7, 6});
-  return m[0] == 0;
-}
-
 // Drifts particles [first, last): v += a dt/2, x += v dt, their kinematics blocks rewritten
 // (position, radius, the velocities the forces see, mass); max_disp_sq rises to the largest
 // squared displacement since the last list build, bad falls to the first particle that moved
