@@ -9,11 +9,6 @@
 #include <cstdint>
 #include <cstring>
 
-// Without AVX-512, GCC notes that 64-byte vectors are passed differently (-Wpsabi): nothing
-// here crosses a translation unit compiled with other flags (inline, private to src/).
-#pragma GCC diagnostic push
-#pragma GCC diagnostic ignored "-Wpsabi"
-
 namespace contactlab::dem::detail {
 
 using Lanes = double __attribute__((vector_size(64)));
@@ -28,13 +23,14 @@ inline Lanes load_lanes(const double* p) {
 inline void store_lanes(double* p, const Lanes& v) { std::memcpy(p, &v, sizeof v); }
 
 // Whether any lane of a comparison's mask is set, or false.
-[[gnu::always_inline]] inline bool any_set(LaneIndex m) {
+[[gnu::always_inline]] inline bool any_set(const LaneIndex& mask) {
+  LaneIndex m = mask;
   m |= __builtin_shuffle(m, LaneIndex{4, 5, 6, 7, 0, 1, 2, 3});
   m |= __builtin_shuffle(m, LaneIndex{2, 3, 0, 1, 6, 7, 4, 5});
   m |= __builtin_shuffle(m, LaneIndex{1, 0, 3, 2, 5, 4, 7, 6});
   return m[0] != 0;
 }
-[[gnu::always_inline]] inline bool any_false(LaneIndex m) { return any_set(~m); }
+[[gnu::always_inline]] inline bool any_false(const LaneIndex& m) { return any_set(~m); }
 
 // Rows r[0..7] of eight doubles in, their columns out (c[k][l] = r[l][k]).
 [[gnu::always_inline]] inline void transpose8(const Lanes (&r)[8], Lanes (&c)[8]) {
@@ -112,5 +108,3 @@ struct KinColumns {
 }
 
 }  // namespace contactlab::dem::detail
-
-#pragma GCC diagnostic pop

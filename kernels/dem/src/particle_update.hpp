@@ -16,10 +16,6 @@
 #include "kin_columns.hpp"
 #include "pair_block.hpp"
 
-// 64-byte vectors without AVX-512: see kin_columns.hpp.
-#pragma GCC diagnostic push
-#pragma GCC diagnostic ignored "-Wpsabi"
-
 namespace contactlab::dem::detail {
 
 // The particle arrays the passes read and write, as plain pointers held over a loop (a call
@@ -252,5 +248,3 @@ inline void drift_particles(Particles& p, double* kin, const DriftTerms& t, std:
 }
 
 }  // namespace contactlab::dem::detail
-
-#pragma GCC diagnostic pop
