@@ -168,8 +168,6 @@ struct PackedI {
         wz(ki[10]) {}
 };
 
-// Pair k's inputs into the block at b, seen from its i side (the same operations, in the same
-// order, as the law on whole particles, so nothing is rounded differently).
 // The block's input fields, looked up once per pack.
 struct PackTargets {
   double* f[PairBlock::kInputs];
@@ -178,6 +176,8 @@ struct PackTargets {
   }
 };
 
+// Pair k's inputs into the block at b, seen from its i side (the same operations, in the same
+// order, as the law on whole particles, so nothing is rounded differently).
 template <bool kRolling>
 inline void pack_pair(const double* kin, const PairList& q, const PackedI& pi, std::size_t k,
                       std::size_t b, const PackTargets& t) {
