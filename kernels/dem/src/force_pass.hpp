@@ -56,6 +56,17 @@ inline void count_overlaps(const double* flags, std::size_t count, std::size_t k
   return kRadiusLanes ? Lanes{} + r : fixed;
 }
 
+// Pair b's j side (its record p, rolling torques roll[.][b]) subtracted from the sums aj of
+// its j particle, of radius rj: lane by lane the scalar a - f, a - r_j c, a - (-t) = a + t
+// (lane 7 unused).
+template <bool kRolling>
+[[gnu::always_inline]] inline void subtract_j_side(double* aj, const double* p, double rj,
+                                                   const double* const* roll, std::size_t b) {
+  Lanes sum = load_lanes(aj) - load_lanes(p) * record_scale(rj, -1.0);
+  if constexpr (kRolling) sum -= Lanes{0, 0, 0, roll[0][b], roll[1][b], roll[2][b], 0, 0};
+  store_lanes(aj, sum);
+}
+
 // The rows [first, last) of a block: each row's outputs summed in pair order (i's force,
 // torque, touching contacts: lanes 0-6 of the sum, lane 7 zero) and handed to store(i, sum),
 // its overlaps counted, and each pair handed to j_side(p, roll, k, b) after its i side (p: the
@@ -108,12 +119,7 @@ inline void accumulate_ordered(const double* kin, PairList& q, std::size_t first
       }
       return;
     }
-    // Lane by lane the scalar j side: a - f, a - r_j c, a - (-t) = a + t (lane 7 unused).
-    const double rj = kin[kKinStride * j + 3];
-    double* aj = acc + kAccStride * j;
-    Lanes sum = load_lanes(aj) - load_lanes(p) * record_scale(rj, -1.0);
-    if constexpr (kRolling) sum -= Lanes{0, 0, 0, roll[0][b], roll[1][b], roll[2][b], 0, 0};
-    store_lanes(aj, sum);
+    subtract_j_side<kRolling>(acc + kAccStride * j, p, kin[kKinStride * j + 3], roll, b);
   };
   sum_rows<kRolling>(
       q, first, last, blk, kin, large, bad, j_side,
@@ -333,20 +339,15 @@ inline void accumulate_rows(const double* kin, const PairList& q, std::size_t fi
 template <bool kRolling>
 inline void accumulate_j_sides(const double* kin, const PairList& q, std::size_t first,
                                std::size_t last, PairBlock& blk, double* acc) {
-  const double* o[PairBlock::kOutputs];
-  for (int f = 0; f < PairBlock::kOutputs; ++f) o[f] = blk.out(static_cast<PairBlock::Output>(f));
   const std::size_t e0 = q.j_offsets[first];
+  const double* rec = to_records(blk, q.j_offsets[last] - e0);
+  const double* roll[3] = {blk.out(PairBlock::kRollX), blk.out(PairBlock::kRollY),
+                           blk.out(PairBlock::kRollZ)};
   for (std::size_t a = first; a < last; ++a) {
     const double r = kin[kKinStride * a + 3];
-    double* aa = acc + kAccStride * a;
     for (std::size_t e = q.j_offsets[a]; e < q.j_offsets[a + 1]; ++e) {
       const std::size_t b = e - e0;
-      for (int d = 0; d < 3; ++d) {
-        aa[d] -= o[PairBlock::kFx + d][b];
-        aa[3 + d] -= r * o[PairBlock::kCx + d][b];
-        if constexpr (kRolling) aa[3 + d] -= o[PairBlock::kRollX + d][b];
-      }
-      aa[6] += o[PairBlock::kTouch][b];
+      subtract_j_side<kRolling>(acc + kAccStride * a, rec + kLanes * b, r, roll, b);
     }
   }
 }
