@@ -122,6 +122,24 @@ void Engine::refresh_kinematics(double kick) {
     predict_velocities(p, k, accelerations(p, k), kick, kin);
   }
   index_wall_reach();
+  index_pair_constants();
+}
+
+void Engine::index_pair_constants() {
+  // The same expressions the law used per pair and step, so nothing is rounded differently.
+  const Particles& p = particles_;
+  PairList& q = pairs_;
+  const PairCoefficients& c = coefficients_;
+  const std::size_t pairs = q.size();
+  q.m_star.resize(pairs);
+  q.inv_kt.resize(pairs);
+#pragma omp parallel for schedule(static) num_threads(settings_.threads)
+  for (std::size_t k = 0; k < pairs; ++k) {
+    const double mi = p.mass[q.i[k]], mj = p.mass[q.j[k]];
+    const double m_star = mi * mj / (mi + mj);
+    q.m_star[k] = m_star;
+    q.inv_kt[k] = detail::inverse_kt(c, m_star);
+  }
 }
 
 void Engine::index_wall_reach() {
@@ -312,8 +330,9 @@ void Engine::compute_forces(bool final_kick) {
       const double kn = c.k_abs + c.k_per_mass * m_star, cn = c.c_per_mass * m_star;
       double fn = kn * delta - cn * vn;
       if (c.clamp) fn = std::max(fn, 0.0);
-      const Tangential ft = tangential(nx, ny, nz, vx - vn * nx, vy - vn * ny, vz - vn * nz, fn,
-                                       c.kt_ratio * kn, c.ct_ratio * cn, c.mu, dt, *hx, *hy, *hz);
+      const Tangential ft =
+          tangential(nx, ny, nz, vx - vn * nx, vy - vn * ny, vz - vn * nz, fn, c.kt_ratio * kn,
+                     detail::inverse_kt(c, m_star), c.ct_ratio * cn, c.mu, dt, *hx, *hy, *hz);
       fx += fn * nx + ft.ftx;
       fy += fn * ny + ft.fty;
       fz += fn * nz + ft.ftz;

@@ -181,7 +181,7 @@ void force_pass(const double* kin, std::size_t n, PairList& q, const PairCoeffic
     const std::size_t k0 = q.rows[first], k1 = q.rows[last];
     blk.reserve(k1 - k0);
     pack_rows<kRolling>(kin, q, first, last, blk, acc);
-    pair_law<kRolling, kClamp>(c, dt, k1 - k0, blk, SpringView::in_place(q, k0));
+    pair_law<kRolling, kClamp>(c, dt, k1 - k0, blk, PairView::in_place(q, k0));
     accumulate_ordered<kRolling>(kin, q, first, last, blk, b, acc, large_here, bad_here);
     if (next + lag < last) {
       finish(next, last - lag, true, large_here, bad_wall_here);
@@ -293,7 +293,7 @@ void force_pass_shared(const double* kin, std::size_t n, PairList& q, const Pair
     const std::size_t k0 = q.rows[first], k1 = q.rows[last];
     blk.reserve(k1 - k0);
     pack_rows<kRolling>(kin, q, first, last, blk, target);
-    pair_law<kRolling, kClamp>(c, dt, k1 - k0, blk, SpringView::in_place(q, k0));
+    pair_law<kRolling, kClamp>(c, dt, k1 - k0, blk, PairView::in_place(q, k0));
     if (atomic) {
       accumulate_shared<kRolling, true>(kin, q, first, last, blk, target, large_here, bad_here);
     } else {
@@ -372,10 +372,10 @@ void force_pass_full(const double* kin, std::size_t n, PairList& q, const PairCo
     const std::size_t e0 = q.j_offsets[first], e1 = q.j_offsets[last];
     blk.reserve(std::max(k1 - k0, e1 - e0));
     pack_rows<kRolling>(kin, q, first, last, blk, acc);
-    pair_law<kRolling, kClamp>(c, dt, k1 - k0, blk, SpringView::to_next(q, k0));
+    pair_law<kRolling, kClamp>(c, dt, k1 - k0, blk, PairView::to_next(q, k0));
     accumulate_rows<kRolling>(kin, q, first, last, blk, acc, large_here, bad_here);
     pack_pairs<kRolling>(kin, q, q.j_pairs.data() + e0, e1 - e0, blk);
-    pair_law<kRolling, kClamp>(c, dt, e1 - e0, blk, SpringView::gathered(blk));
+    pair_law<kRolling, kClamp>(c, dt, e1 - e0, blk, PairView::gathered(blk));
     accumulate_j_sides<kRolling>(kin, q, first, last, blk, acc);
     if (fused) {
       finish(first, last, true, large_here, bad_wall_here);

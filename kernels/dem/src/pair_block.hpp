@@ -28,9 +28,17 @@ constexpr std::size_t kPartnerAhead = 8;
 // that a block's outputs are still in L1 when their particles are gathered.
 constexpr std::size_t kRowsPerBlock = 64;
 
+// 1 / k_t of a contact of reduced mass m_star [kg] (0 where k_t is 0): per pair it is a
+// constant of the list (PairList::inv_kt), per wall contact computed on the spot.
+inline double inverse_kt(const PairCoefficients& c, double m_star) {
+  const double kt = c.kt_ratio * (c.k_abs + c.k_per_mass * m_star);
+  return kt > 0 ? 1.0 / kt : 0.0;
+}
+
 // The tangential part of the law for one contact (pair or wall), LAMMPS gran/hooke/history
 // with the stored spring projected first: xi <- xi - (xi.n) n; xi += v_t dt; F_t = -k_t xi -
-// c_t v_t; at |F_t| > mu F_n: F_t scaled to mu F_n and xi = -(F_t + c_t v_t) / k_t.
+// c_t v_t; at |F_t| > mu F_n: F_t scaled to mu F_n and xi = -(F_t + c_t v_t) / k_t, with
+// inv_kt = 1 / k_t given (inverse_kt: the divider is the law's bottleneck on SIMD lanes).
 struct Tangential {
   double ftx, fty, ftz;
 };
@@ -39,8 +47,8 @@ struct Tangential {
 // scalar, and the pair pass took 2.5x as long when a change elsewhere tipped GCC's budget).
 [[gnu::always_inline]] inline Tangential tangential(double nx, double ny, double nz, double vtx,
                                                     double vty, double vtz, double fn, double kt,
-                                                    double ct, double mu, double dt, double& hx,
-                                                    double& hy, double& hz) {
+                                                    double inv_kt, double ct, double mu, double dt,
+                                                    double& hx, double& hy, double& hz) {
   const double hn = hx * nx + hy * ny + hz * nz;
   hx += vtx * dt - hn * nx;
   hy += vty * dt - hn * ny;
@@ -51,12 +59,11 @@ struct Tangential {
   // Branch-free (the pair pass runs this on SIMD lanes): both quotients are computed and the
   // unused one (possibly inf or NaN) is dropped by the selects; slipping implies ft_sq > 0.
   const bool slip = ft_sq > limit * limit;
-  const double slip_scale = limit / std::sqrt(ft_sq), kt_inverse = 1.0 / kt;
+  const double slip_scale = limit / std::sqrt(ft_sq);
   const double scale = slip ? slip_scale : 1.0;
   ftx *= scale;
   fty *= scale;
   ftz *= scale;
-  const double inv_kt = kt > 0 ? kt_inverse : 0.0;
   hx = slip ? -(ftx + ct * vtx) * inv_kt : hx;
   hy = slip ? -(fty + ct * vty) * inv_kt : hy;
   hz = slip ? -(ftz + ct * vtz) * inv_kt : hz;
@@ -73,8 +80,6 @@ struct PairBlock {
     kDz,
     kRr,
     kRmin,
-    kMi,
-    kMj,
     kDvx,
     kDvy,
     kDvz,
@@ -85,9 +90,11 @@ struct PairBlock {
     kDwy,
     kDwz,
     kRprod,
-    kHx,  // the tangential spring, gathered (pack_pairs: pairs out of row order)
-    kHy,
+    kHx,  // the tangential spring and the pair's constants, gathered (pack_pairs: pairs out of
+    kHy,  // row order)
     kHz,
+    kMstar,
+    kInvKt,
     kInputs
   };
   // Force on i [N], n x F_t [N], 1 if touching with a force, the overlap flag (0, 1 above
@@ -189,8 +196,6 @@ inline void pack_pair(const double* kin, const PairList& q, const PackedI& pi, s
   t.f[PairBlock::kDz][b] = pi.z - kj[2] - sh[2];
   t.f[PairBlock::kRr][b] = pi.r + rj;
   t.f[PairBlock::kRmin][b] = rj < pi.r ? rj : pi.r;
-  t.f[PairBlock::kMi][b] = pi.m;
-  t.f[PairBlock::kMj][b] = kj[7];
   t.f[PairBlock::kDvx][b] = pi.vx - kj[4];
   t.f[PairBlock::kDvy][b] = pi.vy - kj[5];
   t.f[PairBlock::kDvz][b] = pi.vz - kj[6];
@@ -234,8 +239,6 @@ template <bool kRolling>
   store_lanes(t.f[PairBlock::kDz] + b, dz);
   store_lanes(t.f[PairBlock::kRr] + b, pi.r + pj.r);
   store_lanes(t.f[PairBlock::kRmin] + b, pj.r < pi.r ? pj.r : pi.r);
-  store_lanes(t.f[PairBlock::kMi] + b, pi.m);
-  store_lanes(t.f[PairBlock::kMj] + b, pj.m);
   store_lanes(t.f[PairBlock::kDvx] + b, pi.vx - pj.vx);
   store_lanes(t.f[PairBlock::kDvy] + b, pi.vy - pj.vy);
   store_lanes(t.f[PairBlock::kDvz] + b, pi.vz - pj.vz);
@@ -274,8 +277,8 @@ inline void pack_rows(const double* kin, const PairList& q, std::size_t first, s
 }
 
 // Pack: the pairs pairs[0 .. count) in that order (e.g. a particle's j sides, for the full
-// list), each seen from its i side as in pack_rows, with its tangential spring gathered into
-// the block (kHx..kHz): pair_law then reads and writes the block's copy, not the list's.
+// list), each seen from its i side as in pack_rows, with its tangential spring and constants
+// gathered into the block (kHx..kInvKt): pair_law then reads and writes the block's copy.
 template <bool kRolling>
 inline void pack_pairs(const double* kin, const PairList& q, const std::uint32_t* pairs,
                        std::size_t count, PairBlock& blk) {
@@ -293,46 +296,52 @@ inline void pack_pairs(const double* kin, const PairList& q, const std::uint32_t
     hx[b] = q.hx[k];
     hy[b] = q.hy[k];
     hz[b] = q.hz[k];
+    t.f[PairBlock::kMstar][b] = q.m_star[k];
+    t.f[PairBlock::kInvKt][b] = q.inv_kt[k];
   }
 }
 
-// Where pair_law reads the block's tangential springs and writes them back: the list's own
-// (in place, in_* == out_*), the list's into its next-step copy (the full list: the springs
-// of this step stay readable for the j sides), or a gathered copy in the block.
-struct SpringView {
+// Where pair_law reads the block's pair constants (m*, 1/k_t) and tangential springs, and
+// writes the springs back: the list's own (in place, in_* == out_*), the list's springs into
+// their next-step copy (the full list: the springs of this step stay readable for the j
+// sides), or a gathered copy in the block.
+struct PairView {
+  const double *m_star, *inv_kt;
   const double *in_x, *in_y, *in_z;
   double *out_x, *out_y, *out_z;
-  static SpringView in_place(PairList& q, std::size_t k0) {
-    return {q.hx.data() + k0, q.hy.data() + k0, q.hz.data() + k0,
-            q.hx.data() + k0, q.hy.data() + k0, q.hz.data() + k0};
+  static PairView in_place(PairList& q, std::size_t k0) {
+    return {q.m_star.data() + k0, q.inv_kt.data() + k0, q.hx.data() + k0, q.hy.data() + k0,
+            q.hz.data() + k0,     q.hx.data() + k0,     q.hy.data() + k0, q.hz.data() + k0};
   }
-  static SpringView to_next(PairList& q, std::size_t k0) {
-    return {q.hx.data() + k0,      q.hy.data() + k0,      q.hz.data() + k0,
-            q.hx_next.data() + k0, q.hy_next.data() + k0, q.hz_next.data() + k0};
+  static PairView to_next(PairList& q, std::size_t k0) {
+    return {q.m_star.data() + k0,  q.inv_kt.data() + k0, q.hx.data() + k0,
+            q.hy.data() + k0,      q.hz.data() + k0,     q.hx_next.data() + k0,
+            q.hy_next.data() + k0, q.hz_next.data() + k0};
   }
-  static SpringView gathered(PairBlock& blk) {
+  static PairView gathered(PairBlock& blk) {
     double* x = blk.in(PairBlock::kHx);
     double* y = blk.in(PairBlock::kHy);
     double* z = blk.in(PairBlock::kHz);
-    return {x, y, z, x, y, z};
+    return {blk.in(PairBlock::kMstar), blk.in(PairBlock::kInvKt), x, y, z, x, y, z};
   }
 };
 
 // The law on the block's `count` packed pairs, each independent of the others, on SIMD lanes (masks
-// instead of branches): outputs zero while apart, springs read and written where `springs` says.
+// instead of branches): outputs zero while apart, constants and springs read (and springs
+// written) where `pair` says.
 // With -ffp-contract=off a lane computes exactly what scalar code would, so where a block boundary
 // falls (it moves with the thread count) changes no bit. Overlaps above 1 % are counted into
 // `large`, the first above 10 % goes to `bad` (both exact).
 template <bool kRolling, bool kClamp>
 inline void pair_law(const PairCoefficients& c, double dt, std::size_t count, PairBlock& blk,
-                     const SpringView& springs) {
+                     const PairView& pair) {
   const double* __restrict dx = blk.in(PairBlock::kDx);
   const double* __restrict dy = blk.in(PairBlock::kDy);
   const double* __restrict dz = blk.in(PairBlock::kDz);
   const double* __restrict rr_in = blk.in(PairBlock::kRr);
   const double* __restrict rmin = blk.in(PairBlock::kRmin);
-  const double* __restrict mi = blk.in(PairBlock::kMi);
-  const double* __restrict mj = blk.in(PairBlock::kMj);
+  const double* __restrict m_star_in = pair.m_star;
+  const double* __restrict inv_kt = pair.inv_kt;
   const double* __restrict dvx = blk.in(PairBlock::kDvx);
   const double* __restrict dvy = blk.in(PairBlock::kDvy);
   const double* __restrict dvz = blk.in(PairBlock::kDvz);
@@ -354,12 +363,12 @@ inline void pair_law(const PairCoefficients& c, double dt, std::size_t count, Pa
   double* __restrict roll_y = blk.out(PairBlock::kRollY);
   double* __restrict roll_z = blk.out(PairBlock::kRollZ);
   // Not __restrict: in place, in and out are the same array (omp simd needs no such promise).
-  const double* hx_in = springs.in_x;
-  const double* hy_in = springs.in_y;
-  const double* hz_in = springs.in_z;
-  double* hx = springs.out_x;
-  double* hy = springs.out_y;
-  double* hz = springs.out_z;
+  const double* hx_in = pair.in_x;
+  const double* hy_in = pair.in_y;
+  const double* hz_in = pair.in_z;
+  double* hx = pair.out_x;
+  double* hy = pair.out_y;
+  double* hz = pair.out_z;
   const double k_abs = c.k_abs, k_per_mass = c.k_per_mass, c_per_mass = c.c_per_mass;
   const double kt_ratio = c.kt_ratio, ct_ratio = c.ct_ratio, mu = c.mu, mu_roll = c.mu_roll;
   double* __restrict out_flag = blk.out(PairBlock::kOverlapFlag);
@@ -373,7 +382,7 @@ inline void pair_law(const PairCoefficients& c, double dt, std::size_t count, Pa
     const double delta = rr - dist;
     const double flag = delta > kFailFraction * rmin[b] ? 2.0 : 1.0;
     out_flag[b] = touch & (delta > kWarnFraction * rmin[b]) ? flag : 0.0;
-    const double m_star = mi[b] * mj[b] / (mi[b] + mj[b]);
+    const double m_star = m_star_in[b];
     // Relative velocity of the contact point: v_i - v_j - (r_i w_i + r_j w_j) x n.
     const double sx = sx_in[b], sy = sy_in[b], sz = sz_in[b];
     const double vx = dvx[b] - (sy * nz - sz * ny);
@@ -384,8 +393,9 @@ inline void pair_law(const PairCoefficients& c, double dt, std::size_t count, Pa
     double fn = kn * delta - cn * vn;
     if constexpr (kClamp) fn = fn < 0.0 ? 0.0 : fn;  // std::max(fn, 0.0)
     double sxk = hx_in[b], syk = hy_in[b], szk = hz_in[b];
-    const Tangential ft = tangential(nx, ny, nz, vx - vn * nx, vy - vn * ny, vz - vn * nz, fn,
-                                     kt_ratio * kn, ct_ratio * cn, mu, dt, sxk, syk, szk);
+    const Tangential ft =
+        tangential(nx, ny, nz, vx - vn * nx, vy - vn * ny, vz - vn * nz, fn, kt_ratio * kn,
+                   inv_kt[b], ct_ratio * cn, mu, dt, sxk, syk, szk);
     hx[b] = touch ? sxk : 0.0;
     hy[b] = touch ? syk : 0.0;
     hz[b] = touch ? szk : 0.0;

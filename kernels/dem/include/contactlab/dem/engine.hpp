@@ -153,6 +153,7 @@ class Engine {
   void refresh_kinematics(double kick);
   double prediction_kick() const;  // dt/2 with synchronised velocities, else 0
   void index_wall_reach();         // wall_reach_ for the particles as they stand
+  void index_pair_constants();     // pairs_.m_star and inv_kt for the list as it stands
   void compute_forces(bool final_kick);
   void check_pair_overlap(std::size_t k) const;
   [[noreturn]] void fail(const std::string& what, std::uint32_t index) const;
