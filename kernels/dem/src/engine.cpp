@@ -18,7 +18,6 @@ using detail::kFailFraction;
 using detail::kKinStride;
 using detail::kWarnFraction;
 using detail::tangential;
-using detail::Tangential;
 
 Engine::Engine(EngineSettings settings, Particles particles)
     : settings_(std::move(settings)),
@@ -330,7 +329,7 @@ void Engine::compute_forces(bool final_kick) {
       const double kn = c.k_abs + c.k_per_mass * m_star, cn = c.c_per_mass * m_star;
       double fn = kn * delta - cn * vn;
       if (c.clamp) fn = std::max(fn, 0.0);
-      const Tangential ft =
+      const detail::Tangential<double> ft =
           tangential(nx, ny, nz, vx - vn * nx, vy - vn * ny, vz - vn * nz, fn, c.kt_ratio * kn,
                      detail::inverse_kt(c, m_star), c.ct_ratio * cn, c.mu, dt, *hx, *hy, *hz);
       fx += fn * nx + ft.ftx;

@@ -30,24 +30,6 @@ inline void combine_counts(std::uint64_t here, std::uint32_t bad_here, std::uint
   }
 }
 
-// The block's overlap flags (pairs k0 .. k0 + count): those above 1 % counted into large, the
-// first above 10 % into bad. Eight at a time: a settled bed has a handful a step.
-inline void count_overlaps(const double* flags, std::size_t count, std::size_t k0,
-                           std::uint64_t& large, std::uint32_t& bad) {
-  auto one = [&](std::size_t b) {
-    if (flags[b] == 0.0) return;
-    ++large;
-    if (flags[b] > 1.0) bad = std::min(bad, static_cast<std::uint32_t>(k0 + b));
-  };
-  std::size_t b = 0;
-  for (; b + kLanes <= count; b += kLanes) {
-    if (any_set(load_lanes(flags + b) != 0.0)) [[unlikely]] {
-      for (std::size_t l = 0; l < kLanes; ++l) one(b + l);
-    }
-  }
-  for (; b < count; ++b) one(b);
-}
-
 // (1, 1, 1, r, r, r, touch, 0): a pair record times it is its force, r times its n x F_t and
 // touch times its touching flag. A broadcast and a blend, not eight inserts.
 [[gnu::always_inline]] inline Lanes record_scale(double r, double touch) {
@@ -67,21 +49,18 @@ template <bool kRolling>
   store_lanes(aj, sum);
 }
 
-// The rows [first, last) of a block: each row's outputs summed in pair order (i's force,
-// torque, touching contacts: lanes 0-6 of the sum, lane 7 zero) and handed to store(i, sum),
-// its overlaps counted, and each pair handed to j_side(p, roll, k, b) after its i side (p: the
+// The rows [first, last) of a block (its records from pair_rows): each row's outputs summed in
+// pair order (i's force, torque, touching contacts: lanes 0-6 of the sum, lane 7 zero) and
+// handed to store(i, sum), and each pair handed to j_side(p, roll, k, b) after its i side (p: the
 // pair's record, roll: the block's rolling torques, b: the pair's lane). A record times
 // (1, 1, 1, -r_i, -r_i, -r_i, 1, 0) adds lane by lane what the scalar sums add (a + b(-c) is
 // a - bc, exactly), so the sums keep their bits.
 template <bool kRolling, class JSide, class Store>
 inline void sum_rows(const PairList& q, std::size_t first, std::size_t last, PairBlock& blk,
-                     const double* kin, std::uint64_t& large, std::uint32_t& bad, JSide&& j_side,
-                     Store&& store) {
-  const std::size_t k0 = q.rows[first], count = q.rows[last] - k0;
-  count_overlaps(blk.out(PairBlock::kOverlapFlag), count, k0, large, bad);
-  const double* rec = to_records(blk, count);
-  const double* roll[3] = {blk.out(PairBlock::kRollX), blk.out(PairBlock::kRollY),
-                           blk.out(PairBlock::kRollZ)};
+                     const double* kin, JSide&& j_side, Store&& store) {
+  const std::size_t k0 = q.rows[first];
+  const double* rec = blk.records();
+  const double* roll[3] = {blk.roll(0), blk.roll(1), blk.roll(2)};
   for (std::size_t i = first; i < last; ++i) {
     const Lanes scale = record_scale(-kin[kKinStride * i + 3], 1.0);
     Lanes sum{};
@@ -105,8 +84,7 @@ inline void sum_rows(const PairList& q, std::size_t first, std::size_t last, Pai
 // pair order, whatever the thread count.
 template <bool kRolling>
 inline void accumulate_ordered(const double* kin, PairList& q, std::size_t first, std::size_t last,
-                               PairBlock& blk, std::size_t own_begin, double* acc,
-                               std::uint64_t& large, std::uint32_t& bad) {
+                               PairBlock& blk, std::size_t own_begin, double* acc) {
   static_assert(PairList::kOutStride == kLanes && kAccStride == kLanes);
   auto j_side = [&](const double* p, const double* const* roll, std::size_t k, std::size_t b) {
     const std::uint32_t j = q.j[k];
@@ -121,9 +99,9 @@ inline void accumulate_ordered(const double* kin, PairList& q, std::size_t first
     }
     subtract_j_side<kRolling>(acc + kAccStride * j, p, kin[kKinStride * j + 3], roll, b);
   };
-  sum_rows<kRolling>(
-      q, first, last, blk, kin, large, bad, j_side,
-      [&](std::size_t i, const Lanes& sum) { store_lanes(acc + kAccStride * i, sum); });
+  sum_rows<kRolling>(q, first, last, blk, kin, j_side, [&](std::size_t i, const Lanes& sum) {
+    store_lanes(acc + kAccStride * i, sum);
+  });
 }
 
 // Adds to particle a's sum the j sides that later threads left in q.out (pairs from rows at
@@ -154,7 +132,7 @@ inline void accumulate_deferred(const double* kin, const PairList& q, std::size_
 }
 
 // The force pass: each thread takes a contiguous range of rows [b, e), computes them a block
-// at a time (pack_rows, pair_law on SIMD lanes, accumulate_ordered) and
+// at a time (pair_rows, accumulate_ordered) and
 // finishes particles [a, z) (finish(a, z, with_walls, large, bad_wall): walls unless serial_walls,
 // when walls(a, ...) adds them for every particle in one thread first; gravity, kick) as soon as
 // the rows holding its j sides, (a, a + lag], are done; lag = max_span finishes particles while
@@ -178,11 +156,9 @@ void force_pass(const double* kin, std::size_t n, PairList& q, const PairCoeffic
   std::size_t next = b;  // the next particle to finish
   for (std::size_t first = b; first < e; first += kRowsPerBlock) {
     const std::size_t last = std::min(e, first + kRowsPerBlock);
-    const std::size_t k0 = q.rows[first], k1 = q.rows[last];
-    blk.reserve(k1 - k0);
-    pack_rows<kRolling>(kin, q, first, last, blk, acc);
-    pair_law<kRolling, kClamp>(c, dt, k1 - k0, blk, PairView::in_place(q, k0));
-    accumulate_ordered<kRolling>(kin, q, first, last, blk, b, acc, large_here, bad_here);
+    pair_rows<kRolling, kClamp>(kin, q, c, dt, first, last, SpringsTo::kList, blk, acc, large_here,
+                                bad_here);
+    accumulate_ordered<kRolling>(kin, q, first, last, blk, b, acc);
     if (next + lag < last) {
       finish(next, last - lag, true, large_here, bad_wall_here);
       next = last - lag;
@@ -246,8 +222,7 @@ inline void add_to(double& sum, double value) {
 // one): i's row summed in registers, then added; each j side subtracted.
 template <bool kRolling, bool kAtomic>
 inline void accumulate_shared(const double* kin, const PairList& q, std::size_t first,
-                              std::size_t last, PairBlock& blk, double* target,
-                              std::uint64_t& large, std::uint32_t& bad) {
+                              std::size_t last, PairBlock& blk, double* target) {
   auto j_side = [&](const double* p, const double* const* roll, std::size_t k, std::size_t b) {
     const std::uint32_t j = q.j[k];
     const double rj = kin[kKinStride * j + 3];
@@ -263,7 +238,7 @@ inline void accumulate_shared(const double* kin, const PairList& q, std::size_t 
     double* ai = target + kAccStride * i;
     for (int f = 0; f < 7; ++f) add_to<kAtomic>(ai[f], sum[f]);
   };
-  sum_rows<kRolling>(q, first, last, blk, kin, large, bad, j_side, add_row);
+  sum_rows<kRolling>(q, first, last, blk, kin, j_side, add_row);
 }
 
 // The force pass of the non-ordered accumulations (per-thread arrays, atomics): blocks of rows
@@ -290,14 +265,12 @@ void force_pass_shared(const double* kin, std::size_t n, PairList& q, const Pair
   }
   PairBlock blk(scratch);
   for_each_block(n, [&](std::size_t first, std::size_t last) {
-    const std::size_t k0 = q.rows[first], k1 = q.rows[last];
-    blk.reserve(k1 - k0);
-    pack_rows<kRolling>(kin, q, first, last, blk, target);
-    pair_law<kRolling, kClamp>(c, dt, k1 - k0, blk, PairView::in_place(q, k0));
+    pair_rows<kRolling, kClamp>(kin, q, c, dt, first, last, SpringsTo::kList, blk, target,
+                                large_here, bad_here);
     if (atomic) {
-      accumulate_shared<kRolling, true>(kin, q, first, last, blk, target, large_here, bad_here);
+      accumulate_shared<kRolling, true>(kin, q, first, last, blk, target);
     } else {
-      accumulate_shared<kRolling, false>(kin, q, first, last, blk, target, large_here, bad_here);
+      accumulate_shared<kRolling, false>(kin, q, first, last, blk, target);
     }
   });
 #pragma omp barrier
@@ -322,27 +295,24 @@ void force_pass_shared(const double* kin, std::size_t n, PairList& q, const Pair
 }
 
 // The full list's i sides: each row's outputs summed in pair order into its particle's sums
-// (assigned: nothing else reaches a particle before its own row), overlaps counted (each pair
-// once: only here).
+// (assigned: nothing else reaches a particle before its own row).
 template <bool kRolling>
 inline void accumulate_rows(const double* kin, const PairList& q, std::size_t first,
-                            std::size_t last, PairBlock& blk, double* acc, std::uint64_t& large,
-                            std::uint32_t& bad) {
+                            std::size_t last, PairBlock& blk, double* acc) {
   sum_rows<kRolling>(
-      q, first, last, blk, kin, large, bad,
+      q, first, last, blk, kin,
       [](const double*, const double* const*, std::size_t, std::size_t) {},
       [&](std::size_t i, const Lanes& sum) { store_lanes(acc + kAccStride * i, sum); });
 }
 
-// The full list's j sides: the block's packed j-side pairs (pack_pairs of j_pairs[e0 ..)),
+// The full list's j sides: the block's j-side pairs (pair_gathered of j_pairs[e0 ..)),
 // subtracted from their j particle's sums in pair order, as the ordered pass does.
 template <bool kRolling>
 inline void accumulate_j_sides(const double* kin, const PairList& q, std::size_t first,
                                std::size_t last, PairBlock& blk, double* acc) {
   const std::size_t e0 = q.j_offsets[first];
-  const double* rec = to_records(blk, q.j_offsets[last] - e0);
-  const double* roll[3] = {blk.out(PairBlock::kRollX), blk.out(PairBlock::kRollY),
-                           blk.out(PairBlock::kRollZ)};
+  const double* rec = blk.records();
+  const double* roll[3] = {blk.roll(0), blk.roll(1), blk.roll(2)};
   for (std::size_t a = first; a < last; ++a) {
     const double r = kin[kKinStride * a + 3];
     for (std::size_t e = q.j_offsets[a]; e < q.j_offsets[a + 1]; ++e) {
@@ -368,14 +338,11 @@ void force_pass_full(const double* kin, std::size_t n, PairList& q, const PairCo
   std::uint32_t bad_here = UINT32_MAX, bad_wall_here = UINT32_MAX;
   PairBlock blk(scratch);
   for_each_block(n, [&](std::size_t first, std::size_t last) {
-    const std::size_t k0 = q.rows[first], k1 = q.rows[last];
     const std::size_t e0 = q.j_offsets[first], e1 = q.j_offsets[last];
-    blk.reserve(std::max(k1 - k0, e1 - e0));
-    pack_rows<kRolling>(kin, q, first, last, blk, acc);
-    pair_law<kRolling, kClamp>(c, dt, k1 - k0, blk, PairView::to_next(q, k0));
-    accumulate_rows<kRolling>(kin, q, first, last, blk, acc, large_here, bad_here);
-    pack_pairs<kRolling>(kin, q, q.j_pairs.data() + e0, e1 - e0, blk);
-    pair_law<kRolling, kClamp>(c, dt, e1 - e0, blk, PairView::gathered(blk));
+    pair_rows<kRolling, kClamp>(kin, q, c, dt, first, last, SpringsTo::kNext, blk, acc, large_here,
+                                bad_here);
+    accumulate_rows<kRolling>(kin, q, first, last, blk, acc);
+    pair_gathered<kRolling, kClamp>(kin, q, c, dt, q.j_pairs.data() + e0, e1 - e0, blk);
     accumulate_j_sides<kRolling>(kin, q, first, last, blk, acc);
     if (fused) {
       finish(first, last, true, large_here, bad_wall_here);
