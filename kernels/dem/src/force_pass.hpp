@@ -76,6 +76,37 @@ inline void sum_rows(const PairList& q, std::size_t first, std::size_t last, Pai
   }
 }
 
+// As sum_rows, with store(i, sum) an assignment to acc (nothing reached i before its row): one
+// flat loop over the block's pairs, where a row's end is a select, not a loop exit (rows of 0
+// to 8 pairs mispredict one exit a row). The running sum starts again from +0 where the row
+// changes and is stored to its particle after every pair (the row's last store stands); the
+// block's particles are zeroed first, for the rows without pairs.
+template <bool kRolling, class JSide>
+inline void assign_rows(const PairList& q, std::size_t first, std::size_t last, PairBlock& blk,
+                        const double* kin, double* acc, JSide&& j_side) {
+  const std::uint32_t* rows = q.rows.data();  // in locals: the stores may alias anything
+  const std::uint32_t* row_of = q.i.data();
+  const std::size_t k0 = rows[first], k1 = rows[last];
+  for (std::size_t a = first; a < last; ++a) store_lanes(acc + kAccStride * a, Lanes{});
+  const double* rec = blk.records();
+  const double* roll[3] = {blk.roll(0), blk.roll(1), blk.roll(2)};
+  Lanes sum{};
+  std::uint32_t current = UINT32_MAX;
+  for (std::size_t k = k0; k < k1; ++k) {
+    const std::uint32_t i = row_of[k];
+    const std::size_t b = k - k0;
+    const double* p = rec + kLanes * b;
+    // All ones in the row, zero at its first pair: sum & keep is sum or +0, no branch.
+    const LaneIndex keep = LaneIndex{} - static_cast<std::int64_t>(i == current);
+    sum = reinterpret_cast<Lanes>(reinterpret_cast<LaneIndex>(sum) & keep);
+    sum += load_lanes(p) * record_scale(-kin[kKinStride * i + 3], 1.0);
+    if constexpr (kRolling) sum += Lanes{0, 0, 0, roll[0][b], roll[1][b], roll[2][b], 0, 0};
+    store_lanes(acc + kAccStride * i, sum);
+    j_side(p, roll, k, b);
+    current = i;
+  }
+}
+
 // The ordered pass's sums: each row summed in registers and stored to its particle (nothing
 // reached it before: its j sides come from later rows), then each j side subtracted from j's
 // sum when this thread owns j (j >= own_begin); otherwise the record is kept in q.out /
@@ -99,9 +130,7 @@ inline void accumulate_ordered(const double* kin, PairList& q, std::size_t first
     }
     subtract_j_side<kRolling>(acc + kAccStride * j, p, kin[kKinStride * j + 3], roll, b);
   };
-  sum_rows<kRolling>(q, first, last, blk, kin, j_side, [&](std::size_t i, const Lanes& sum) {
-    store_lanes(acc + kAccStride * i, sum);
-  });
+  assign_rows<kRolling>(q, first, last, blk, kin, acc, j_side);
 }
 
 // Adds to particle a's sum the j sides that later threads left in q.out (pairs from rows at
@@ -299,10 +328,8 @@ void force_pass_shared(const double* kin, std::size_t n, PairList& q, const Pair
 template <bool kRolling>
 inline void accumulate_rows(const double* kin, const PairList& q, std::size_t first,
                             std::size_t last, PairBlock& blk, double* acc) {
-  sum_rows<kRolling>(
-      q, first, last, blk, kin,
-      [](const double*, const double* const*, std::size_t, std::size_t) {},
-      [&](std::size_t i, const Lanes& sum) { store_lanes(acc + kAccStride * i, sum); });
+  assign_rows<kRolling>(q, first, last, blk, kin, acc,
+                        [](const double*, const double* const*, std::size_t, std::size_t) {});
 }
 
 // The full list's j sides: the block's j-side pairs (pair_gathered of j_pairs[e0 ..)),
