@@ -3,7 +3,8 @@
 // rolling torque, spring and overlap count bit for bit what one pair at a time gives, periodic
 // images (alone or mixed with plain pairs in a group of eight), touching, slipping and apart
 // pairs, and ragged tails included; the engine's thread-count determinism rests on it (block
-// boundaries, and with them which pairs go eight at a time, move with the thread count).
+// boundaries, and with them which pairs go eight at a time, move with the thread count). And
+// the force pass's flat row sums (assign_rows) against the loop per row (sum_rows).
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -11,8 +12,10 @@
 #include <cstring>
 #include <random>
 #include <string>
+#include <utility>
 #include <vector>
 
+#include "force_pass.hpp"
 #include "pair_block.hpp"
 
 namespace contactlab::dem::detail {
@@ -194,6 +197,38 @@ TEST(DemPairBlock, SceneHasEveryKindOfPair) {
   EXPECT_GT(slipping, 10u);
   EXPECT_GT(r.large, 5u);
   EXPECT_NE(r.bad, UINT32_MAX);
+}
+
+TEST(DemForcePass, FlatRowsMatchNestedRows) {
+  // assign_rows (one loop over the pairs, a row's end a select) against sum_rows (a loop per
+  // row) with the same j sides: every particle's sums bit for bit, rows without pairs included.
+  PairScene s = pair_scene(300, 5);
+  for (const auto& [first, last] : {std::pair<std::size_t, std::size_t>{0, 300}, {37, 101}}) {
+    std::vector<double> storage;
+    PairBlock blk(storage);
+    std::uint64_t large = 0;
+    std::uint32_t bad = UINT32_MAX;
+    pair_rows<true, true>(s.kin.data(), s.q, s.c, 1e-3, first, last, SpringsTo::kNext, blk,
+                          s.acc.data(), large, bad);
+    std::vector<double> flat(s.acc.size(), 7.0), nested(s.acc.size(), 7.0);
+    auto j_side_into = [&](std::vector<double>& acc) {
+      return [&](const double* p, const double* const* roll, std::size_t k, std::size_t b) {
+        const std::uint32_t j = s.q.j[k];
+        subtract_j_side<true>(acc.data() + kAccStride * j, p, s.kin[kKinStride * j + 3], roll, b);
+      };
+    };
+    assign_rows<true>(s.q, first, last, blk, s.kin.data(), flat.data(), j_side_into(flat));
+    for (std::size_t a = first; a < last; ++a)
+      std::fill_n(nested.data() + kAccStride * a, kAccStride, 0.0);
+    sum_rows<true>(
+        s.q, first, last, blk, s.kin.data(), j_side_into(nested),
+        [&](std::size_t i, const Lanes& sum) { store_lanes(nested.data() + kAccStride * i, sum); });
+    EXPECT_TRUE(same_bits(flat.data(), nested.data(), flat.size()))
+        << "rows [" << first << ", " << last << ")";
+  }
+  std::size_t empty_rows = 0;
+  for (std::size_t i = 0; i < 300; ++i) empty_rows += s.q.rows[i] == s.q.rows[i + 1];
+  EXPECT_GT(empty_rows, 10u);
 }
 
 }  // namespace
