@@ -1,4 +1,4 @@
-// The DEM force pass (private to src/): blocks of rows through pack_rows and pair_law, their
+// The DEM force pass (private to src/): blocks of rows through the pair kernel (pair_rows), their
 // outputs summed per particle (ordered: in pair order for any thread count; per-thread arrays
 // or atomics: the report's accumulations), and each particle finished.
 #pragma once

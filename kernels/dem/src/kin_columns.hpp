@@ -1,7 +1,7 @@
 // Eight particles' kinematics blocks as columns (the x of all eight, their y, ...), by two
-// vector loads per block and in-register 8x8 transposes (private to src/). The pair pack uses
-// it to fill eight lanes of a field with one store: eleven scalar loads and one scalar store per
-// field and pair cost more than the pair law itself. GCC vector extensions: AVX-512 shuffles
+// vector loads per block and in-register 8x8 transposes (private to src/). The pair kernel
+// uses it to fill eight lanes of a field at once: eleven scalar loads per field and pair cost
+// more than the pair law itself. GCC vector extensions: AVX-512 shuffles
 // where -march allows, narrower vectors elsewhere, the same values on every target.
 #pragma once
 
