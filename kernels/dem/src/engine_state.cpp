@@ -36,7 +36,7 @@ Energies Engine::energies() const {
         p.radius[i] + p.radius[j] -
         std::hypot(p.x[i] - p.x[j] - sh[0], p.y[i] - p.y[j] - sh[1], p.z[i] - p.z[j] - sh[2]);
     if (delta <= 0) continue;
-    const double kn = c.k_n(p.mass[i] * p.mass[j] / (p.mass[i] + p.mass[j]));
+    const double kn = c.k_n(q.m_star[k]);
     const double h2 = q.hx[k] * q.hx[k] + q.hy[k] * q.hy[k] + q.hz[k] * q.hz[k];
     elastic += 0.5 * kn * delta * delta + 0.5 * c.kt_ratio * kn * h2;
   }

@@ -33,7 +33,7 @@ constexpr std::size_t kRowsPerBlock = 64;
 // 1 / k_t of a contact of reduced mass m_star [kg] (0 where k_t is 0): per pair it is a
 // constant of the list (PairList::inv_kt), per wall contact computed on the spot.
 inline double inverse_kt(const PairCoefficients& c, double m_star) {
-  const double kt = c.kt_ratio * (c.k_abs + c.k_per_mass * m_star);
+  const double kt = c.kt_ratio * c.k_n(m_star);
   return kt > 0 ? 1.0 / kt : 0.0;
 }
 
