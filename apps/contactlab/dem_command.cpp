@@ -231,11 +231,14 @@ struct DemRunCommand {
     const double stop_mass = until_discharged_ * start_mass;
     const double t0 = omp_get_wtime();
     const std::uint64_t first_step = engine.step_count();
-    std::uint64_t particle_steps = 0;
+    const std::uint64_t first_particle_steps = engine.particle_steps();
+    // Between outputs the steps run as one batch (each finish drifts the next step), unless
+    // something is checked after every step.
+    const bool step_by_step = (tuning && retune_) || stop_mass > 0;
     try {
       while (engine.step_count() < total_steps) {
-        particle_steps += engine.particles().size();
-        engine.step();
+        const std::uint64_t to_output = every - (engine.step_count() - first_step) % every;
+        engine.run_steps(step_by_step ? 1 : std::min(to_output, total_steps - engine.step_count()));
         if (tuning && retune_) tuning->after_step(engine);
         const bool empty = engine.particles().size() == 0;
         if ((engine.step_count() - first_step) % every == 0 || engine.step_count() == total_steps ||
@@ -274,9 +277,11 @@ struct DemRunCommand {
     const double steps = static_cast<double>(engine.step_count() - first_step);
     const dem::Energies e = engine.energies();
     const dem::PhaseTimes& ph = engine.phase_times();
-    fmt::print("done: t = {:.6g} s, {} steps in {:.3f} s ({:.3g} particle-steps/s), {} rebuilds\n",
-               engine.time_s(), steps, wall,
-               static_cast<double>(particle_steps) / std::max(wall, 1e-9), engine.rebuilds());
+    fmt::print(
+        "done: t = {:.6g} s, {} steps in {:.3f} s ({:.3g} particle-steps/s), {} rebuilds\n",
+        engine.time_s(), steps, wall,
+        static_cast<double>(engine.particle_steps() - first_particle_steps) / std::max(wall, 1e-9),
+        engine.rebuilds());
     fmt::print(
         "phases [s]: neighbour list {:.3f}, pair forces {:.3f}, reduction {:.3f}, serial walls "
         "{:.3f}, update {:.3f}, integration {:.3f}\n",

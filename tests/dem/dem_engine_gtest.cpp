@@ -57,6 +57,72 @@ TEST(DemEngine, FusedAndSplitForcePassesAgree) {
   }
 }
 
+// run_steps(k) drifts each next step in the finish's pass over the particles: the same bits
+// as k calls of step() (springs, forces, rebuilds included), for every accumulation, schedule,
+// update placement and thread count.
+TEST(DemEngine, BatchedStepsMatchSingleSteps) {
+  auto [settings, particles] = test::small_bed();
+  for (const char* variant :
+       {"ordered/static", "ordered/static/update=fused", "per-thread/dynamic,2", "atomic/static",
+        "full-list/guided,1", "full-list/static/update=fused", "ordered/static/walls=serial"}) {
+    for (const int threads : {1, 3}) {
+      EngineSettings s = settings;
+      s.force_variant = parse_force_variant(variant);
+      s.threads = threads;
+      Engine batched(s, particles), single(s, particles);
+      batched.run_steps(700);
+      for (int k = 0; k < 700; ++k) single.step();
+      EXPECT_GT(batched.rebuilds(), 1u);
+      EXPECT_EQ(batched.rebuilds(), single.rebuilds()) << variant;
+      EXPECT_EQ(batched.particle_steps(), single.particle_steps()) << variant;
+      EXPECT_TRUE(test::bitwise_equal(test::state_by_id(batched), test::state_by_id(single)))
+          << variant << ", " << threads << " threads";
+      EXPECT_TRUE(test::bitwise_equal(batched.particles().fx, single.particles().fx)) << variant;
+      EXPECT_TRUE(test::bitwise_equal(batched.pairs().hx, single.pairs().hx)) << variant;
+    }
+  }
+}
+
+// A run that fails inside a batch stops at the same step with the same message (the particle,
+// its position, the overlap or move) as one step at a time: a move too long (found by a drift
+// done in the finish), overlaps too deep with a wall and between particles (the finish then
+// does not drift).
+TEST(DemEngine, BatchedStepsFailWhereSingleStepsFail) {
+  auto message = [](const EngineSettings& s, const Particles& p, bool batched) {
+    Engine engine(s, p);
+    try {
+      if (batched) {
+        engine.run_steps(5000);
+      } else {
+        for (int k = 0; k < 5000; ++k) engine.step();
+      }
+    } catch (const UnstableRun& e) {
+      return std::string(e.what());
+    }
+    return std::string("no failure");
+  };
+  auto [settings, particles] = test::small_bed(20);
+  settings.threads = 2;
+  EngineSettings pushed = settings;
+  pushed.gravity = {2e5, 0, 0};  // along the periodic x: a move longer than skin/2 in time
+  const std::string moved = message(pushed, particles, false);
+  EXPECT_NE(moved.find("moved"), std::string::npos) << moved;
+  EXPECT_EQ(message(pushed, particles, true), moved);
+  EngineSettings falling = settings;
+  falling.gravity = {0, 0, -2e5};  // into the floor: the overlap with the wall passes 10 %
+  const std::string into_wall = message(falling, particles, false);
+  EXPECT_NE(into_wall.find("wall"), std::string::npos) << into_wall;
+  EXPECT_EQ(message(falling, particles, true), into_wall);
+  Particles head_on = particles;  // particles 0 and 1 meet at 12 m/s: the overlap passes 10 %
+  head_on.vx[0] = 6.0;
+  head_on.vx[1] = -6.0;
+  head_on.y[1] = head_on.y[0];
+  head_on.z[1] = head_on.z[0];
+  const std::string overlap = message(settings, head_on, false);
+  EXPECT_NE(overlap.find("overlap"), std::string::npos) << overlap;
+  EXPECT_EQ(message(settings, head_on, true), overlap);
+}
+
 TEST(DemEngine, BitIdenticalForAnySchedule) {
   auto [settings, particles] = test::small_bed(60);
   settings.threads = 2;

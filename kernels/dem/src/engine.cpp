@@ -188,25 +188,49 @@ void Engine::fail(const std::string& what, std::uint32_t index) const {
                   what, step_, time_s_, p.id[index], p.x[index], p.y[index], p.z[index]));
 }
 
-void Engine::step() {
+namespace {
+
+// The drift's constants: dt, dt/2, the prediction kick, (skin/2)^2.
+detail::DriftTerms drift_terms(const EngineSettings& s, double kick) {
+  return {s.dt_s, 0.5 * s.dt_s, kick, 0.25 * s.skin * s.skin};
+}
+
+}  // namespace
+
+void Engine::step() { advance(false); }
+
+void Engine::run_steps(std::uint64_t steps) {
+  for (std::uint64_t s = 0; s < steps; ++s) {
+    if (s > 0 && particles_.size() == 0) break;  // the sink took every particle
+    advance(s + 1 < steps);
+  }
+}
+
+void Engine::advance(bool drift_next) {
   Particles& p = particles_;
   const std::size_t n = p.size();
-  const double dt = settings_.dt_s, half = 0.5 * dt;
-  const double kick = prediction_kick();
+  const double dt = settings_.dt_s;
   const double move_limit_sq = 0.25 * settings_.skin * settings_.skin;
   double t0 = omp_get_wtime();
   double max_disp_sq = 0.0;
   std::uint32_t bad = UINT32_MAX;  // the first particle that moved too far or is not finite
-  const detail::DriftTerms terms{dt, half, kick, move_limit_sq};
-  // Each thread drifts the particles whose rows it takes in the force pass (n t / T ..).
+  particle_steps_ += n;
+  if (drifted_) {  // the last finish drifted this step already
+    drifted_ = false;
+    max_disp_sq = drifted_disp_sq_;
+    bad = drifted_bad_;
+  } else {
+    const detail::DriftTerms terms = drift_terms(settings_, prediction_kick());
+    // Each thread drifts the particles whose rows it takes in the force pass (n t / T ..).
 #pragma omp parallel num_threads(settings_.threads) reduction(max                          \
                                                               : max_disp_sq) reduction(min \
                                                                                        : bad)
-  {
-    const auto t = static_cast<std::size_t>(omp_get_thread_num());
-    const auto threads = static_cast<std::size_t>(omp_get_num_threads());
-    detail::drift_particles(p, kin_.data(), terms, n * t / threads, n * (t + 1) / threads,
-                            max_disp_sq, bad);
+    {
+      const auto t = static_cast<std::size_t>(omp_get_thread_num());
+      const auto threads = static_cast<std::size_t>(omp_get_num_threads());
+      detail::drift_particles(p, kin_.data(), terms, n * t / threads, n * (t + 1) / threads,
+                              max_disp_sq, bad);
+    }
   }
   // Time from the last (re)start's base: exact multiples of dt, also after a dt change.
   time_s_ = base_time_s_ + static_cast<double>(step_ + 1 - base_step_) * dt;
@@ -224,7 +248,9 @@ void Engine::step() {
     rebuild();
     phases_.neighbor_s += omp_get_wtime() - t1;
   }
-  compute_forces(true);
+  // The finish can drift only once every pair has read the kinematics blocks: after the pass
+  // (update=separate), not among the pairs.
+  compute_forces(true, drift_next && !settings_.force_variant.fused_update);
 }
 
 void Engine::check_pair_overlap(std::size_t k) const {
@@ -246,7 +272,7 @@ void Engine::set_force_variant(const ForceVariant& variant) {
   settings_.force_variant = variant;
 }
 
-void Engine::compute_forces(bool final_kick) {
+void Engine::compute_forces(bool final_kick, bool drift_next) {
   Particles& p = particles_;
   PairList& q = pairs_;
   const PairCoefficients& c = coefficients_;
@@ -360,12 +386,34 @@ void Engine::compute_forces(bool final_kick) {
       {settings_.gravity[0], settings_.gravity[1], settings_.gravity[2]},
       half,
       final_kick};
+  // With drift_next (after every pair: update=separate), each piece of particles is drifted
+  // into the next step as soon as it is finished, while its arrays are still in cache. Not
+  // where a pair (known by now) or one of the piece's walls failed: the run stops, and its
+  // message shows the positions of this step. Per thread: the drift's largest displacement,
+  // its first failed particle, and (thread 0) its time for PhaseTimes::integrate_s.
+  const detail::DriftTerms drift = drift_terms(settings_, prediction_kick());
+  const auto threads = static_cast<std::size_t>(settings_.threads);
+  std::vector<double> drift_disp_sq(threads, 0.0);
+  std::vector<std::uint32_t> drift_bad(threads, UINT32_MAX);
+  double drift_s = 0.0;
   auto finish = [&](std::size_t first, std::size_t last, bool with_walls, std::uint64_t& large_here,
                     std::uint32_t& bad_wall_here) {
     if (with_walls) {
       for (std::size_t a = first; a < last; ++a) walls(a, large_here, bad_wall_here);
     }
-    detail::finish_particles(kin_.data(), acc, p, terms, first, last);
+    if (!drift_next || !final_kick || bad_pair != UINT32_MAX || bad_wall_here != UINT32_MAX) {
+      detail::finish_particles(kin_.data(), acc, p, terms, first, last);
+      return;
+    }
+    const auto t = static_cast<std::size_t>(omp_get_thread_num());
+    constexpr std::size_t kPiece = 256;  // particles: their arrays (about 100 KB) stay in L2
+    for (std::size_t a = first; a < last; a += kPiece) {
+      const std::size_t z = std::min(last, a + kPiece);
+      detail::finish_particles(kin_.data(), acc, p, terms, a, z);
+      const double d0 = t == 0 ? omp_get_wtime() : 0.0;
+      detail::drift_particles(p, kin_.data(), drift, a, z, drift_disp_sq[t], drift_bad[t]);
+      if (t == 0) drift_s += omp_get_wtime() - d0;
+    }
   };
   const double* kin = kin_.data();
   // Phase ends as thread 0 sees them (after barriers, so the same for all threads).
@@ -430,10 +478,16 @@ void Engine::compute_forces(bool final_kick) {
   phases_.pair_forces_s += t_pairs - t0;
   phases_.reduction_s += t_reduced - t_pairs;
   phases_.walls_s += t_walls - t_reduced;
-  phases_.update_s += t_end - t_walls;
+  phases_.update_s += t_end - t_walls - drift_s;
+  phases_.integrate_s += drift_s;
   if (bad_pair != UINT32_MAX) check_pair_overlap(bad_pair);
   if (bad_wall_particle != UINT32_MAX) {
     fail("overlap with a wall above 10 % of the diameter", bad_wall_particle);
+  }
+  if (drift_next && final_kick) {  // no failure: every particle was drifted
+    drifted_ = true;
+    drifted_disp_sq_ = *std::max_element(drift_disp_sq.begin(), drift_disp_sq.end());
+    drifted_bad_ = *std::min_element(drift_bad.begin(), drift_bad.end());
   }
   large_overlaps_ += large;
   if (large > 0 && !warned_ && settings_.warn_large_overlaps) {

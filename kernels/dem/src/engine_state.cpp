@@ -46,6 +46,7 @@ Energies Engine::energies() const {
 }
 
 void Engine::restore(const State& state, Particles particles, PairList pairs) {
+  drifted_ = false;  // restored whole: no step is half done
   time_s_ = state.time_s;
   base_time_s_ = state.time_s;
   base_step_ = state.step;

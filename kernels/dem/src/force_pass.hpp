@@ -193,6 +193,9 @@ void force_pass(const double* kin, std::size_t n, PairList& q, const PairCoeffic
       next = last - lag;
     }
   }
+  // The pairs' failures before the barrier: a finish after it knows whether any pair failed.
+  combine_counts(large_here, bad_here, large, bad_pair);
+  large_here = 0;
 #pragma omp barrier
   mark(Phase::kPairs);
   for (std::size_t a = std::max(next, e > q.max_span ? e - q.max_span : 0); a < e; ++a) {
@@ -206,8 +209,7 @@ void force_pass(const double* kin, std::size_t n, PairList& q, const PairCoeffic
     mark(Phase::kWalls);
   }
   if (next < e) finish(next, e, !serial_walls, large_here, bad_wall_here);
-  combine_counts(large_here, bad_here, large, bad_pair);
-  combine_counts(0, bad_wall_here, large, bad_wall);
+  combine_counts(large_here, bad_wall_here, large, bad_wall);
 }
 
 // body(first, last) for the particles [first, last) of each block of kRowsPerBlock, the
@@ -302,6 +304,8 @@ void force_pass_shared(const double* kin, std::size_t n, PairList& q, const Pair
       accumulate_shared<kRolling, false>(kin, q, first, last, blk, target);
     }
   });
+  combine_counts(large_here, bad_here, large, bad_pair);  // before the update: see force_pass
+  large_here = 0;
 #pragma omp barrier
   mark(Phase::kPairs);
   if (!atomic) {  // the reduction, in thread order
@@ -319,8 +323,7 @@ void force_pass_shared(const double* kin, std::size_t n, PairList& q, const Pair
     mark(Phase::kWalls);
   }
   update_blocks(n, serial_walls, finish, large_here, bad_wall_here);
-  combine_counts(large_here, bad_here, large, bad_pair);
-  combine_counts(0, bad_wall_here, large, bad_wall);
+  combine_counts(large_here, bad_wall_here, large, bad_wall);
 }
 
 // The full list's i sides: each row's outputs summed in pair order into its particle's sums
@@ -375,6 +378,8 @@ void force_pass_full(const double* kin, std::size_t n, PairList& q, const PairCo
       finish(first, last, true, large_here, bad_wall_here);
     }
   });
+  combine_counts(large_here, bad_here, large, bad_pair);  // before the update: see force_pass
+  large_here = 0;
 #pragma omp barrier
   mark(Phase::kPairs);
   mark(Phase::kReduction);
@@ -386,8 +391,7 @@ void force_pass_full(const double* kin, std::size_t n, PairList& q, const PairCo
     }
     update_blocks(n, serial_walls, finish, large_here, bad_wall_here);
   }
-  combine_counts(large_here, bad_here, large, bad_pair);
-  combine_counts(0, bad_wall_here, large, bad_wall);
+  combine_counts(large_here, bad_wall_here, large, bad_wall);
 }
 
 }  // namespace contactlab::dem::detail

@@ -39,8 +39,8 @@ struct EngineSettings {
   // breaks the energy balance: its work counts as dissipated).
   double viscous_damping = 0.0;
   // How the force pass runs in parallel (force_variant.hpp). The default, ordered with the
-  // fused update, is bit-identical for any thread count; with update=separate PhaseTimes
-  // splits the pair forces from walls + finish + kick.
+  // update separate, is bit-identical for any thread count; PhaseTimes then splits the pair
+  // forces from walls + finish + kick (update=fused counts them in the pair forces).
   ForceVariant force_variant;
   // The sink (LIGGGHTS `delete` region): particles whose centre is below this height [m] leave
   // the run at the next neighbour-list rebuild, their mass counted (sink.cpp). -inf = no sink.
@@ -51,7 +51,8 @@ struct EngineSettings {
 // parallel; the carrying of springs and the reorder on one thread), the
 // pair forces, the reduction (the j sides other threads left, or the per-thread arrays' sum),
 // the walls when one thread does them (walls=serial), the update (walls when parallel,
-// gravity, kick), the integration (half kick, drift, checks). With the fused ordered pass
+// gravity, kick), the integration (half kick, drift, checks; inside run_steps the drift runs
+// in the finish's pass, and thread 0's time in it is counted here). With the fused ordered pass
 // (the default) the pairs, reduction and update are one phase, counted in pair_forces_s.
 struct PhaseTimes {
   double neighbor_s = 0.0, pair_forces_s = 0.0, reduction_s = 0.0, walls_s = 0.0, update_s = 0.0,
@@ -94,9 +95,10 @@ class Engine {
   Engine(EngineSettings settings, Particles particles);
 
   void step();
-  void run_steps(std::uint64_t steps) {
-    for (std::uint64_t s = 0; s < steps; ++s) step();
-  }
+  // `steps` steps, each one's finish (update=separate) followed by the next one's drift in
+  // the same pass over the particles (their arrays read once, not twice): the same bits as
+  // calling step() `steps` times; between the calls nothing is half-stepped.
+  void run_steps(std::uint64_t steps);
 
   const Particles& particles() const { return particles_; }
   Particles& mutable_particles() { return particles_; }
@@ -106,6 +108,8 @@ class Engine {
   double time_s() const { return time_s_; }
   std::uint64_t step_count() const { return step_; }
   std::uint64_t rebuilds() const { return rebuilds_; }
+  // Particles times steps since construction (each step counts the particles it started with).
+  std::uint64_t particle_steps() const { return particle_steps_; }
   const PhaseTimes& phase_times() const { return phases_; }
   // Index of the particle with stable id `id` in the current order; kRemoved once the sink took
   // it (ids stay those of the config: after removals they are no longer dense).
@@ -154,7 +158,10 @@ class Engine {
   double prediction_kick() const;  // dt/2 with synchronised velocities, else 0
   void index_wall_reach();         // wall_reach_ for the particles as they stand
   void index_pair_constants();     // pairs_.m_star and inv_kt for the list as it stands
-  void compute_forces(bool final_kick);
+  // One step; with drift_next, the finish also drifts the particles into the next step, which
+  // must follow at once (advance() then skips its drift).
+  void advance(bool drift_next);
+  void compute_forces(bool final_kick, bool drift_next = false);
   void check_pair_overlap(std::size_t k) const;
   [[noreturn]] void fail(const std::string& what, std::uint32_t index) const;
 
@@ -165,7 +172,7 @@ class Engine {
   NeighborBuilder builder_;
   std::vector<std::uint32_t> index_of_id_;
   double time_s_ = 0.0;
-  std::uint64_t step_ = 0, rebuilds_ = 0, large_overlaps_ = 0;
+  std::uint64_t step_ = 0, rebuilds_ = 0, large_overlaps_ = 0, particle_steps_ = 0;
   std::uint64_t removed_count_ = 0;
   double removed_mass_ = 0.0;
   bool warned_ = false;
@@ -173,6 +180,11 @@ class Engine {
   double base_time_s_ = 0.0;  // time and step of the last restore: t = base + (step - base) dt
   std::uint64_t base_step_ = 0;
   PhaseTimes phases_;
+  // Set when the last finish also drifted the next step (its largest displacement since the
+  // list build and the first particle it failed, as the drift reports them).
+  bool drifted_ = false;
+  double drifted_disp_sq_ = 0.0;
+  std::uint32_t drifted_bad_ = UINT32_MAX;
   std::vector<double> kin_;  // what the pair loop reads per particle, side by side
   // Per particle, bit w set when wall w may touch it before the next rebuild.
   std::vector<std::uint32_t> wall_reach_;
