@@ -51,9 +51,10 @@ struct EngineSettings {
 // parallel; the carrying of springs and the reorder on one thread), the
 // pair forces, the reduction (the j sides other threads left, or the per-thread arrays' sum),
 // the walls when one thread does them (walls=serial), the update (walls when parallel,
-// gravity, kick), the integration (half kick, drift, checks; inside run_steps the drift runs
-// in the finish's pass, and thread 0's time in it is counted here). With the fused ordered pass
-// (the default) the pairs, reduction and update are one phase, counted in pair_forces_s.
+// gravity, kick), the integration (half kick, drift, checks; inside run_steps the drift of
+// the next step runs in the finish's pass, and its time counts in the update's). With the fused
+// ordered pass (the default) the pairs, reduction and update are one phase, counted in
+// pair_forces_s.
 struct PhaseTimes {
   double neighbor_s = 0.0, pair_forces_s = 0.0, reduction_s = 0.0, walls_s = 0.0, update_s = 0.0,
          integrate_s = 0.0;
