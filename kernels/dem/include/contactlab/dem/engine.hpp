@@ -189,6 +189,7 @@ class Engine {
   std::vector<double> kin_;  // what the pair loop reads per particle, side by side
   // Per particle, bit w set when wall w may touch it before the next rebuild.
   std::vector<std::uint32_t> wall_reach_;
+  std::vector<std::uint32_t> wall_reachers_;  // the particles with a bit in wall_reach_, in order
   std::vector<double> acc_;  // per particle: the force pass's pair sums (detail::kAccStride)
   std::vector<std::vector<double>> block_scratch_;  // per thread: the force pass's pair block
   std::vector<std::vector<double>> thread_acc_;     // per thread: sums (per-thread accumulation)
