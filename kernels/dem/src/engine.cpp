@@ -382,10 +382,16 @@ void Engine::compute_forces(bool final_kick, bool drift_next) {
       touching += fn > 0;
     }
   };
-  // The walls alone, into a's sums (walls=serial: one thread after all pairs).
-  auto walls = [&](std::size_t a, std::uint64_t& large_here, std::uint32_t& bad_wall_here) {
-    double* sum = acc + detail::kAccStride * a;
-    add_walls(a, sum[0], sum[1], sum[2], sum[3], sum[4], sum[5], sum[6], large_here, bad_wall_here);
+  // The walls of particles [first, last) into their sums (in the finish, or with walls=serial
+  // for all particles on one thread after all pairs): only those some wall may reach.
+  auto walls = [&](std::size_t first, std::size_t last, std::uint64_t& large_here,
+                   std::uint32_t& bad_wall_here) {
+    auto a = std::lower_bound(wall_reachers_.begin(), wall_reachers_.end(), first);
+    for (; a != wall_reachers_.end() && *a < last; ++a) {
+      double* sum = acc + detail::kAccStride * *a;
+      add_walls(*a, sum[0], sum[1], sum[2], sum[3], sum[4], sum[5], sum[6], large_here,
+                bad_wall_here);
+    }
   };
   // The particles [first, last)'s finish: their walls into their sums (unless added
   // already), then the sums, gravity, drag and kick over the range (finish_particles).
@@ -405,10 +411,7 @@ void Engine::compute_forces(bool final_kick, bool drift_next) {
   std::vector<std::uint32_t> drift_bad(threads, UINT32_MAX);
   auto finish = [&](std::size_t first, std::size_t last, bool with_walls, std::uint64_t& large_here,
                     std::uint32_t& bad_wall_here) {
-    if (with_walls) {
-      auto a = std::lower_bound(wall_reachers_.begin(), wall_reachers_.end(), first);
-      for (; a != wall_reachers_.end() && *a < last; ++a) walls(*a, large_here, bad_wall_here);
-    }
+    if (with_walls) walls(first, last, large_here, bad_wall_here);
     if (!drift_next || !final_kick || bad_pair != UINT32_MAX || bad_wall_here != UINT32_MAX) {
       detail::finish_particles(kin_.data(), acc, p, terms, first, last);
       return;

@@ -163,7 +163,7 @@ inline void accumulate_deferred(const double* kin, const PairList& q, std::size_
 // The force pass: each thread takes a contiguous range of rows [b, e), computes them a block
 // at a time (pair_rows, accumulate_ordered) and
 // finishes particles [a, z) (finish(a, z, with_walls, large, bad_wall): walls unless serial_walls,
-// when walls(a, ...) adds them for every particle in one thread first; gravity, kick) as soon as
+// when walls(0, n, ...) adds them for every particle in one thread first; gravity, kick) as soon as
 // the rows holding its j sides, (a, a + lag], are done; lag = max_span finishes particles while
 // their sums are still in cache (fused), lag = n finishes every particle after the barrier (split:
 // the pair phase timed alone). mark(phase) is called by every thread where a phase ends (after the
@@ -205,7 +205,7 @@ void force_pass(const double* kin, std::size_t n, PairList& q, const PairCoeffic
   if (serial_walls) {  // every particle's pairs are in (fused is off: no one finished yet)
 #pragma omp barrier
 #pragma omp single
-    for (std::size_t a = 0; a < n; ++a) walls(a, large_here, bad_wall_here);
+    walls(0, n, large_here, bad_wall_here);
     mark(Phase::kWalls);
   }
   if (next < e) finish(next, e, !serial_walls, large_here, bad_wall_here);
@@ -319,7 +319,7 @@ void force_pass_shared(const double* kin, std::size_t n, PairList& q, const Pair
   mark(Phase::kReduction);
   if (serial_walls) {
 #pragma omp single
-    for (std::size_t a = 0; a < n; ++a) walls(a, large_here, bad_wall_here);
+    walls(0, n, large_here, bad_wall_here);
     mark(Phase::kWalls);
   }
   update_blocks(n, serial_walls, finish, large_here, bad_wall_here);
@@ -386,7 +386,7 @@ void force_pass_full(const double* kin, std::size_t n, PairList& q, const PairCo
   if (!fused) {
     if (serial_walls) {
 #pragma omp single
-      for (std::size_t a = 0; a < n; ++a) walls(a, large_here, bad_wall_here);
+      walls(0, n, large_here, bad_wall_here);
       mark(Phase::kWalls);
     }
     update_blocks(n, serial_walls, finish, large_here, bad_wall_here);
