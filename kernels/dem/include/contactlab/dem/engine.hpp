@@ -52,7 +52,8 @@ struct EngineSettings {
 // pair forces, the reduction (the j sides other threads left, or the per-thread arrays' sum),
 // the walls when one thread does them (walls=serial), the update (walls when parallel,
 // gravity, kick), the integration (half kick, drift, checks; inside run_steps the drift of
-// the next step runs in the finish's pass, and its time counts in the update's). With the fused
+// the next step runs in the finish's pass, and thread 0's time in it, sampled on every eighth
+// piece of particles, counts here, not in the update). With the fused
 // ordered pass (the default) the pairs, reduction and update are one phase, counted in
 // pair_forces_s.
 struct PhaseTimes {
