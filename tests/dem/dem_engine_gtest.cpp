@@ -113,6 +113,8 @@ TEST(DemEngine, BatchedStepsFailWhereSingleStepsFail) {
   const std::string into_wall = message(falling, particles, false);
   EXPECT_NE(into_wall.find("wall"), std::string::npos) << into_wall;
   EXPECT_EQ(message(falling, particles, true), into_wall);
+  falling.force_variant = parse_force_variant("ordered/static/walls=serial");  // one thread's
+  EXPECT_EQ(message(falling, particles, true), message(falling, particles, false));
   Particles head_on = particles;  // particles 0 and 1 meet at 12 m/s: the overlap passes 10 %
   head_on.vx[0] = 6.0;
   head_on.vx[1] = -6.0;

@@ -218,7 +218,7 @@ void Engine::advance(bool drift_next) {
   Particles& p = particles_;
   const std::size_t n = p.size();
   const double dt = settings_.dt_s;
-  const double move_limit_sq = 0.25 * settings_.skin * settings_.skin;
+  const detail::DriftTerms terms = drift_terms(settings_, prediction_kick());
   double t0 = omp_get_wtime();
   double max_disp_sq = 0.0;
   std::uint32_t bad = UINT32_MAX;  // the first particle that moved too far or is not finite
@@ -228,7 +228,6 @@ void Engine::advance(bool drift_next) {
     max_disp_sq = drifted_disp_sq_;
     bad = drifted_bad_;
   } else {
-    const detail::DriftTerms terms = drift_terms(settings_, prediction_kick());
     // Each thread drifts the particles whose rows it takes in the force pass (n t / T ..).
 #pragma omp parallel num_threads(settings_.threads) reduction(max                          \
                                                               : max_disp_sq) reduction(min \
@@ -252,7 +251,7 @@ void Engine::advance(bool drift_next) {
                           : std::string("position or velocity is not finite (NaN)"),
          bad);
   }
-  if (max_disp_sq > move_limit_sq) {
+  if (max_disp_sq > terms.move_limit_sq) {
     rebuild();
     phases_.neighbor_s += omp_get_wtime() - t1;
   }
@@ -410,10 +409,19 @@ void Engine::compute_forces(bool final_kick, bool drift_next) {
   std::vector<double> drift_disp_sq(threads, 0.0);
   std::vector<std::uint32_t> drift_bad(threads, UINT32_MAX);
   double drift_s = 0.0;  // thread 0's, sampled
+  // walls=serial: every particle's walls on one thread, inside `omp single`, whose barrier
+  // shows a failure to every thread's finish (with parallel walls a piece's own fail there).
+  bool serial_wall_failed = false;
+  auto serial_walls = [&](std::size_t first, std::size_t last, std::uint64_t& large_here,
+                          std::uint32_t& bad_wall_here) {
+    walls(first, last, large_here, bad_wall_here);
+    serial_wall_failed = bad_wall_here != UINT32_MAX;
+  };
   auto finish = [&](std::size_t first, std::size_t last, bool with_walls, std::uint64_t& large_here,
                     std::uint32_t& bad_wall_here) {
     if (with_walls) walls(first, last, large_here, bad_wall_here);
-    if (!drift_next || !final_kick || bad_pair != UINT32_MAX || bad_wall_here != UINT32_MAX) {
+    if (!drift_next || !final_kick || bad_pair != UINT32_MAX || bad_wall_here != UINT32_MAX ||
+        serial_wall_failed) {
       detail::finish_particles(kin_.data(), acc, p, terms, first, last);
       return;
     }
@@ -465,17 +473,17 @@ void Engine::compute_forces(bool final_kick, bool drift_next) {
     {
       std::vector<double>& scratch = block_scratch_[omp_get_thread_num()];
       if (ordered) {
-        detail::force_pass<kRolling, kClamp>(kin, n, q, c, dt, variant.fused_update,
-                                             variant.serial_walls, acc, scratch, finish, walls,
-                                             mark, large, bad_pair, bad_wall_particle);
+        detail::force_pass<kRolling, kClamp>(
+            kin, n, q, c, dt, variant.fused_update, variant.serial_walls, acc, scratch, finish,
+            serial_walls, mark, large, bad_pair, bad_wall_particle);
       } else if (full) {
-        detail::force_pass_full<kRolling, kClamp>(kin, n, q, c, dt, variant.fused_update,
-                                                  variant.serial_walls, acc, scratch, finish, walls,
-                                                  mark, large, bad_pair, bad_wall_particle);
+        detail::force_pass_full<kRolling, kClamp>(
+            kin, n, q, c, dt, variant.fused_update, variant.serial_walls, acc, scratch, finish,
+            serial_walls, mark, large, bad_pair, bad_wall_particle);
       } else {
         detail::force_pass_shared<kRolling, kClamp>(kin, n, q, c, dt, atomic, variant.serial_walls,
-                                                    acc, thread_acc_, scratch, finish, walls, mark,
-                                                    large, bad_pair, bad_wall_particle);
+                                                    acc, thread_acc_, scratch, finish, serial_walls,
+                                                    mark, large, bad_pair, bad_wall_particle);
       }
     }
   };

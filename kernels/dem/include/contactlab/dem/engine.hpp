@@ -53,9 +53,8 @@ struct EngineSettings {
 // the walls when one thread does them (walls=serial), the update (walls when parallel,
 // gravity, kick), the integration (half kick, drift, checks; inside run_steps the drift of
 // the next step runs in the finish's pass, and thread 0's time in it, sampled on every eighth
-// piece of particles, counts here, not in the update). With the fused
-// ordered pass (the default) the pairs, reduction and update are one phase, counted in
-// pair_forces_s.
+// piece of particles, counts here, not in the update). With update=fused the pairs,
+// reduction and update are one phase, counted in pair_forces_s.
 struct PhaseTimes {
   double neighbor_s = 0.0, pair_forces_s = 0.0, reduction_s = 0.0, walls_s = 0.0, update_s = 0.0,
          integrate_s = 0.0;
