@@ -405,9 +405,10 @@ void Engine::compute_forces(bool final_kick, bool drift_next) {
   // the positions of this step. Per thread: the drift's largest displacement and its first failed
   // particle.
   const detail::DriftTerms drift = drift_terms(settings_, prediction_kick());
-  const auto threads = static_cast<std::size_t>(settings_.threads);
-  std::vector<double> drift_disp_sq(threads, 0.0);
-  std::vector<std::uint32_t> drift_bad(threads, UINT32_MAX);
+  const bool drifts = drift_next && final_kick;
+  const std::size_t slots = drifts ? static_cast<std::size_t>(settings_.threads) : 0;
+  std::vector<double> drift_disp_sq(slots, 0.0);  // nothing allocated in a step that won't drift
+  std::vector<std::uint32_t> drift_bad(slots, UINT32_MAX);
   double drift_s = 0.0;  // thread 0's, sampled
   // walls=serial: every particle's walls on one thread, inside `omp single`, whose barrier
   // shows a failure to every thread's finish (with parallel walls a piece's own fail there).
@@ -420,8 +421,7 @@ void Engine::compute_forces(bool final_kick, bool drift_next) {
   auto finish = [&](std::size_t first, std::size_t last, bool with_walls, std::uint64_t& large_here,
                     std::uint32_t& bad_wall_here) {
     if (with_walls) walls(first, last, large_here, bad_wall_here);
-    if (!drift_next || !final_kick || bad_pair != UINT32_MAX || bad_wall_here != UINT32_MAX ||
-        serial_wall_failed) {
+    if (!drifts || bad_pair != UINT32_MAX || bad_wall_here != UINT32_MAX || serial_wall_failed) {
       detail::finish_particles(kin_.data(), acc, p, terms, first, last);
       return;
     }
@@ -513,7 +513,7 @@ void Engine::compute_forces(bool final_kick, bool drift_next) {
   if (bad_wall_particle != UINT32_MAX) {
     fail("overlap with a wall above 10 % of the diameter", bad_wall_particle);
   }
-  if (drift_next && final_kick) {  // no failure: every particle was drifted
+  if (drifts) {  // no failure: every particle was drifted
     drifted_ = true;
     drifted_disp_sq_ = *std::max_element(drift_disp_sq.begin(), drift_disp_sq.end());
     drifted_bad_ = *std::min_element(drift_bad.begin(), drift_bad.end());
