@@ -83,6 +83,27 @@ TEST(DemEngine, BatchedStepsMatchSingleSteps) {
   }
 }
 
+// In a batch the drift's time moves from the update to the integration as a share of thread
+// 0's finish loop, so no phase can go below zero, batch by batch, even on a scene of a few
+// pieces where one stalled sample once stood for all of them (CI: a negative update made the
+// force model's calibration zero).
+TEST(DemEngine, BatchedPhaseTimesAreNeverNegative) {
+  auto [settings, particles] = test::small_bed(20);
+  for (const int threads : {1, 2}) {
+    settings.threads = threads;
+    Engine engine(settings, particles);
+    for (int batch = 0; batch < 300; ++batch) {
+      const PhaseTimes before = engine.phase_times();
+      engine.run_steps(3);
+      const PhaseTimes d = engine.phase_times() - before;
+      for (const double phase :
+           {d.neighbor_s, d.pair_forces_s, d.reduction_s, d.walls_s, d.update_s, d.integrate_s}) {
+        ASSERT_GE(phase, 0.0) << "batch " << batch << ", " << threads << " threads";
+      }
+    }
+  }
+}
+
 // A run that fails inside a batch stops at the same step with the same message (the particle,
 // its position, the overlap or move) as one step at a time: a move too long (found by a drift
 // done in the finish), overlaps too deep with a wall and between particles (the finish then

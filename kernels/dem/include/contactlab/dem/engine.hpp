@@ -52,8 +52,8 @@ struct EngineSettings {
 // pair forces, the reduction (the j sides other threads left, or the per-thread arrays' sum),
 // the walls when one thread does them (walls=serial), the update (walls when parallel,
 // gravity, kick), the integration (half kick, drift, checks; inside run_steps the drift of
-// the next step runs in the finish's pass, and thread 0's time in it, sampled on every eighth
-// piece of particles, counts here, not in the update). With update=fused the pairs,
+// the next step runs in the finish's pass, and its share of thread 0's time there, sampled on
+// every eighth piece of particles, counts here, not in the update). With update=fused the pairs,
 // reduction and update are one phase, counted in pair_forces_s.
 struct PhaseTimes {
   double neighbor_s = 0.0, pair_forces_s = 0.0, reduction_s = 0.0, walls_s = 0.0, update_s = 0.0,
