@@ -45,7 +45,7 @@ class VariantTuning {
                costs_.calibration_runs, costs_.calibration_steps, costs_.calibration_seconds);
     decide(engine, true);
   }
-  void after_step(dem::Engine& engine) {
+  void after_steps(dem::Engine& engine) {
     if (engine.rebuilds() == rebuilds_seen_) return;
     decide(engine, false);
   }
@@ -232,14 +232,16 @@ struct DemRunCommand {
     const double t0 = omp_get_wtime();
     const std::uint64_t first_step = engine.step_count();
     const std::uint64_t first_particle_steps = engine.particle_steps();
-    // Between outputs the steps run as one batch (each finish drifts the next step), unless
-    // something is checked after every step.
-    const bool step_by_step = (tuning && retune_) || stop_mass > 0;
+    // Between outputs the steps run as one batch (each finish drifts the next step). The
+    // re-tuner and --until-discharged look after each neighbour-list rebuild (the only step that
+    // changes the pair list or the discharged mass): their batches end there.
+    const auto end = (tuning && retune_) || stop_mass > 0 ? dem::Engine::BatchEnd::kAtRebuild
+                                                          : dem::Engine::BatchEnd::kAfterSteps;
     try {
       while (engine.step_count() < total_steps) {
         const std::uint64_t to_output = every - (engine.step_count() - first_step) % every;
-        engine.run_steps(step_by_step ? 1 : std::min(to_output, total_steps - engine.step_count()));
-        if (tuning && retune_) tuning->after_step(engine);
+        engine.run_steps(std::min(to_output, total_steps - engine.step_count()), end);
+        if (tuning && retune_) tuning->after_steps(engine);
         const bool empty = engine.particles().size() == 0;
         if ((engine.step_count() - first_step) % every == 0 || engine.step_count() == total_steps ||
             empty) {

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -151,6 +152,38 @@ TEST(DemCli, RunStopsWhenEveryParticleHasLeft) {
   EXPECT_NE(r.output.find("150 particles, 0 left"), std::string::npos) << r.output;
   const std::string csv = slurp(dir.file("d.csv"));
   EXPECT_NE(csv.find(",150,0\n"), std::string::npos) << csv;
+}
+
+// --until-discharged F: the run stops at the first step (a neighbour-list rebuild: the sink's
+// step) by which the sink has taken F of the mass, writes its last row and checkpoint, exit 0.
+TEST(DemCli, RunStopsWhenTheSinkHasTakenTheFraction) {
+  TempDir dir;
+  std::string text = slurp(tiny_hopper(dir));
+  const std::string key = "\"below\": -0.002";
+  text.replace(text.find(key), key.size(), "\"below\": 0.002");  // the bottom layers
+  const std::string config = dir.file("half-out.json");
+  std::ofstream(config) << text;
+  const auto r = run_command(contactlab_exe() + " dem run " + config + " --threads 2 --discharge " +
+                             dir.file("d.csv") + " --checkpoint " + dir.file("c.chk") +
+                             " --until-discharged 0.5");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const auto at = r.output.find("the sink has taken ");
+  ASSERT_NE(at, std::string::npos) << r.output;
+  double taken = 0, total = 0;
+  ASSERT_EQ(
+      std::sscanf(r.output.c_str() + at, "the sink has taken %lf kg of %lf kg", &taken, &total), 2)
+      << r.output;
+  EXPECT_GE(taken, 0.5 * total);
+  EXPECT_LT(taken, total);
+  EXPECT_TRUE(fs::exists(dir.file("c.chk")));
+  // The discharge series ends on the stopping step, with the mass the message gives.
+  const std::string csv = slurp(dir.file("d.csv"));
+  const std::string last = csv.substr(csv.rfind('\n', csv.size() - 2) + 1);
+  double time_s = 0, last_kg = 0;
+  long step = 0;
+  ASSERT_EQ(std::sscanf(last.c_str(), "%lf,%ld,%lf", &time_s, &step, &last_kg), 3) << csv;
+  EXPECT_GT(step, 0);
+  EXPECT_NEAR(last_kg, taken, 1e-5 * taken) << csv;
 }
 
 TEST(DemCli, PngSectionsAndDischargePlot) {

@@ -83,6 +83,35 @@ TEST(DemEngine, BatchedStepsMatchSingleSteps) {
   }
 }
 
+// A batch that ends at rebuilds (dem run --retune, --until-discharged) ends right after the
+// step that rebuilt the list, never leaves a drift pending, and gives the bits of single steps.
+TEST(DemEngine, BatchesEndingAtRebuildsMatchSingleSteps) {
+  auto [settings, particles] = test::small_bed();
+  for (const int threads : {1, 3}) {
+    EngineSettings s = settings;
+    s.threads = threads;
+    Engine batched(s, particles), single(s, particles);
+    int ended_early = 0;
+    while (batched.step_count() < 700) {
+      const std::uint64_t rebuilds = batched.rebuilds();
+      const std::uint64_t done = batched.run_steps(50, Engine::BatchEnd::kAtRebuild);
+      ASSERT_GE(done, 1u);
+      ASSERT_LE(done, 50u);
+      EXPECT_LE(batched.rebuilds(), rebuilds + 1) << "a batch ran past a rebuild";
+      EXPECT_EQ(done < 50, batched.rebuilds() == rebuilds + 1) << "step " << batched.step_count();
+      ended_early += done < 50;
+      while (single.step_count() + 1 < batched.step_count()) single.step();
+      EXPECT_EQ(single.rebuilds(), rebuilds) << "the rebuild was not the batch's last step";
+      single.step();
+      ASSERT_EQ(single.rebuilds(), batched.rebuilds()) << "step " << batched.step_count();
+    }
+    EXPECT_GT(ended_early, 1);
+    EXPECT_TRUE(test::bitwise_equal(test::state_by_id(batched), test::state_by_id(single)))
+        << threads << " threads";
+    EXPECT_TRUE(test::bitwise_equal(batched.particles().fx, single.particles().fx));
+  }
+}
+
 // In a batch the drift's time moves from the update to the integration as a share of thread
 // 0's finish loop, so no phase can go below zero, batch by batch, even on a scene of a few
 // pieces where one stalled sample once stood for all of them (CI: a negative update made the

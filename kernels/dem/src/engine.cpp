@@ -207,14 +207,19 @@ detail::DriftTerms drift_terms(const EngineSettings& s, double kick) {
 
 void Engine::step() { advance(false); }
 
-void Engine::run_steps(std::uint64_t steps) {
-  for (std::uint64_t s = 0; s < steps; ++s) {
-    if (s > 0 && particles_.size() == 0) break;  // the sink took every particle
-    advance(s + 1 < steps);
+std::uint64_t Engine::run_steps(std::uint64_t steps, BatchEnd end) {
+  const bool at_rebuild = end == BatchEnd::kAtRebuild;
+  std::uint64_t done = 0;
+  while (done < steps) {
+    if (done > 0 && particles_.size() == 0) break;  // the sink took every particle
+    const bool rebuilt = advance(done + 1 < steps, at_rebuild);
+    ++done;
+    if (rebuilt && at_rebuild) break;
   }
+  return done;
 }
 
-void Engine::advance(bool drift_next) {
+bool Engine::advance(bool drift_next, bool end_at_rebuild) {
   Particles& p = particles_;
   const std::size_t n = p.size();
   const double dt = settings_.dt_s;
@@ -251,13 +256,16 @@ void Engine::advance(bool drift_next) {
                           : std::string("position or velocity is not finite (NaN)"),
          bad);
   }
-  if (max_disp_sq > terms.move_limit_sq) {
+  const bool rebuilds = max_disp_sq > terms.move_limit_sq;
+  if (rebuilds) {
     rebuild();
     phases_.neighbor_s += omp_get_wtime() - t1;
   }
   // The finish can drift only once every pair has read the kinematics blocks: after the pass
   // (update=separate), not among the pairs.
-  compute_forces(true, drift_next && !settings_.force_variant.fused_update);
+  compute_forces(
+      true, drift_next && !(rebuilds && end_at_rebuild) && !settings_.force_variant.fused_update);
+  return rebuilds;
 }
 
 void Engine::check_pair_overlap(std::size_t k) const {

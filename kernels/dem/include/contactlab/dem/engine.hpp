@@ -96,10 +96,15 @@ class Engine {
   Engine(EngineSettings settings, Particles particles);
 
   void step();
-  // `steps` steps, each one's finish (update=separate) followed by the next one's drift in
-  // the same pass over the particles (their arrays read once, not twice): the same bits as
-  // calling step() `steps` times; between the calls nothing is half-stepped.
-  void run_steps(std::uint64_t steps);
+  // Where a batch of run_steps may end early: kAtRebuild ends it after a step that rebuilt
+  // the neighbour list, the only step where the sink takes particles and the pair list a
+  // re-tuner prices can change (dem run --retune, --until-discharged check after it).
+  enum class BatchEnd { kAfterSteps, kAtRebuild };
+  // Up to `steps` steps, each one's finish (update=separate) followed by the next one's drift
+  // in the same pass over the particles (their arrays read once, not twice): the same bits as
+  // calling step() as often; between the calls nothing is half-stepped. Fewer when the sink
+  // has taken every particle or, with kAtRebuild, after a rebuild. Returns the steps run.
+  std::uint64_t run_steps(std::uint64_t steps, BatchEnd end = BatchEnd::kAfterSteps);
 
   const Particles& particles() const { return particles_; }
   Particles& mutable_particles() { return particles_; }
@@ -160,8 +165,9 @@ class Engine {
   void index_wall_reach();         // wall_reach_ for the particles as they stand
   void index_pair_constants();     // pairs_.m_star and inv_kt for the list as it stands
   // One step; with drift_next, the finish also drifts the particles into the next step, which
-  // must follow at once (advance() then skips its drift).
-  void advance(bool drift_next);
+  // must follow at once (advance() then skips its drift), unless the step rebuilds and
+  // end_at_rebuild. Returns whether it rebuilt the neighbour list.
+  bool advance(bool drift_next, bool end_at_rebuild = false);
   void compute_forces(bool final_kick, bool drift_next = false);
   void check_pair_overlap(std::size_t k) const;
   [[noreturn]] void fail(const std::string& what, std::uint32_t index) const;
