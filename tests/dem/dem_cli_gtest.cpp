@@ -137,13 +137,19 @@ TEST(DemCli, HopperWritesDischargeSeriesAndStopsAfterSteps) {
   EXPECT_EQ(std::count(longer.begin(), longer.end(), '\n'), 5) << longer;
 }
 
-TEST(DemCli, RunStopsWhenEveryParticleHasLeft) {
-  TempDir dir;
+// The tiny hopper with its sink at z = `below` (a number in the config's text).
+std::string tiny_hopper_with_sink(const TempDir& dir, const std::string& below) {
   std::string text = slurp(tiny_hopper(dir));
   const std::string key = "\"below\": -0.002";
-  text.replace(text.find(key), key.size(), "\"below\": 1.0");  // above every particle
-  const std::string config = dir.file("all-out.json");
+  text.replace(text.find(key), key.size(), "\"below\": " + below);
+  const std::string config = dir.file("sink-" + below + ".json");
   std::ofstream(config) << text;
+  return config;
+}
+
+TEST(DemCli, RunStopsWhenEveryParticleHasLeft) {
+  TempDir dir;
+  const std::string config = tiny_hopper_with_sink(dir, "1.0");  // above every particle
   const auto r = run_command(contactlab_exe() + " dem run " + config + " --threads 1 --discharge " +
                              dir.file("d.csv"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
@@ -158,11 +164,7 @@ TEST(DemCli, RunStopsWhenEveryParticleHasLeft) {
 // step) by which the sink has taken F of the mass, writes its last row and checkpoint, exit 0.
 TEST(DemCli, RunStopsWhenTheSinkHasTakenTheFraction) {
   TempDir dir;
-  std::string text = slurp(tiny_hopper(dir));
-  const std::string key = "\"below\": -0.002";
-  text.replace(text.find(key), key.size(), "\"below\": 0.002");  // the bottom layers
-  const std::string config = dir.file("half-out.json");
-  std::ofstream(config) << text;
+  const std::string config = tiny_hopper_with_sink(dir, "0.002");  // the bottom layers
   const auto r = run_command(contactlab_exe() + " dem run " + config + " --threads 2 --discharge " +
                              dir.file("d.csv") + " --checkpoint " + dir.file("c.chk") +
                              " --until-discharged 0.5");
