@@ -441,8 +441,8 @@ void Engine::compute_forces(bool final_kick, bool drift_next) {
       detail::finish_particles(kin_.data(), acc, p, terms, first, last);
       return;
     }
-    const bool timer = omp_get_thread_num() == 0;
     const auto t = static_cast<std::size_t>(omp_get_thread_num());
+    const bool timer = t == 0;
     constexpr std::size_t kPiece = 64;  // particles: what they read (about 25 KB) stays in L1
     // Thread 0 times its whole loop, and the finish and the drift apart on every
     // kTimedEvery-th piece; the drift's share of the loop is their ratio (timing every piece
