@@ -334,9 +334,28 @@ TEST(DemCli, RunRetunesAtRebuildsAndLogsTheVariants) {
   EXPECT_NE(r.output.find("variants ran"), std::string::npos) << r.output;
   const std::string csv = slurp(log);
   EXPECT_EQ(csv.rfind("begin_step,end_step,time_s,variant,predicted_gain\n0,", 0), 0u) << csv;
+  EXPECT_NE(r.output.find("variant auto: starts with"), std::string::npos) << r.output;
   const auto bad = run_command(contactlab_exe() + " dem run " + config_path() + " --retune");
   EXPECT_EQ(bad.exit_code, 2) << bad.output;
   EXPECT_NE(bad.output.find("--retune needs --variant auto"), std::string::npos) << bad.output;
+}
+
+// The start leaves the config's variant only for a predicted gain above the margin, as every
+// later switch does: with a margin no prediction reaches, the run keeps the default throughout.
+TEST(DemCli, AutoVariantKeepsTheDefaultWithinTheMargin) {
+  TempDir dir;
+  const std::string log = dir.file("variants.csv");
+  const auto r = run_command(contactlab_exe() + " dem run " + config_path() +
+                             " --threads 2 --steps 100 --variant auto --retune --retune-margin 100 "
+                             "--calibration-steps 5 --variant-log " +
+                             log);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("variant auto: starts with ordered/static (the model's best, "),
+            std::string::npos)
+      << r.output;
+  const std::string csv = slurp(log);
+  EXPECT_EQ(csv.find('\n', csv.find('\n') + 1) + 1, csv.size()) << "one variant ran: " << csv;
+  EXPECT_NE(csv.find(",ordered/static,"), std::string::npos) << csv;
 }
 
 }  // namespace

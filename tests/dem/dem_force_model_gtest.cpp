@@ -150,6 +150,7 @@ TEST(DemForceModel, RetunerSwitchesOnlyPastItsMargin) {
   const ForceRetuner::Decision kept = reluctant.decide(*engine, ForceVariant{});
   EXPECT_FALSE(kept.switched);
   EXPECT_EQ(kept.variant, ForceVariant{});
+  EXPECT_EQ(kept.best, parse_force_variant("full-list/static")) << "the best is named when kept";
 }
 
 }  // namespace

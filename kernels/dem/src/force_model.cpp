@@ -259,8 +259,8 @@ ForceRetuner::Decision ForceRetuner::decide(const Engine& engine,
   const std::vector<RankedVariant> ranked = rank_force_variants(work, candidates_, threads, costs_);
   const double now = predict_force_pass(work, current, threads, costs_).seconds;
   const RankedVariant& best = ranked.front();
-  Decision d{current, best.prediction.seconds > 0 ? now / best.prediction.seconds - 1.0 : 0.0,
-             false};
+  Decision d{current, best.variant,
+             best.prediction.seconds > 0 ? now / best.prediction.seconds - 1.0 : 0.0, false};
   if (d.predicted_gain > margin_ && !(best.variant == current)) {
     d.variant = best.variant;
     d.switched = true;

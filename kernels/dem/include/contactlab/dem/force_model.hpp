@@ -93,7 +93,8 @@ class ForceRetuner {
   ForceRetuner(ForceCosts costs, std::vector<ForceVariant> candidates, double margin)
       : costs_(costs), candidates_(std::move(candidates)), margin_(margin) {}
   struct Decision {
-    ForceVariant variant;
+    ForceVariant variant;         // the one to run: the best, or the current one
+    ForceVariant best;            // the fastest predicted
     double predicted_gain = 0.0;  // current / best predicted time - 1
     bool switched = false;
   };
