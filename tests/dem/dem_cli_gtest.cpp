@@ -319,22 +319,27 @@ TEST(DemCli, TuneDemRunsModelSearchAndExhaustive) {
   EXPECT_EQ(model.output.find("search "), std::string::npos) << model.output;
 }
 
+// `dem run --variant auto --retune` of the drop box with `flags` added: its output, and its
+// variant log (CSV) in `log`.
+CommandResult run_retuned(const std::string& flags, const std::string& log) {
+  return run_command(contactlab_exe() + " dem run " + config_path() +
+                     " --threads 2 --variant auto --retune --calibration-steps 5 " + flags +
+                     " --variant-log " + log);
+}
+
 // dem run --variant auto --retune: the model's choice at the start and at every rebuild, the
 // log of which variant ran when; --retune alone is refused.
 TEST(DemCli, RunRetunesAtRebuildsAndLogsTheVariants) {
   TempDir dir;
   const std::string log = dir.file("variants.csv");
-  const auto r = run_command(contactlab_exe() + " dem run " + config_path() +
-                             " --threads 2 --steps 300 --variant auto --retune "
-                             "--calibration-steps 5 --variant-log " +
-                             log);
+  const auto r = run_retuned("--steps 300", log);
   EXPECT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("variant auto: force model calibrated by 10 runs"), std::string::npos)
       << r.output;
+  EXPECT_NE(r.output.find("variant auto: starts with"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("variants ran"), std::string::npos) << r.output;
   const std::string csv = slurp(log);
   EXPECT_EQ(csv.rfind("begin_step,end_step,time_s,variant,predicted_gain\n0,", 0), 0u) << csv;
-  EXPECT_NE(r.output.find("variant auto: starts with"), std::string::npos) << r.output;
   const auto bad = run_command(contactlab_exe() + " dem run " + config_path() + " --retune");
   EXPECT_EQ(bad.exit_code, 2) << bad.output;
   EXPECT_NE(bad.output.find("--retune needs --variant auto"), std::string::npos) << bad.output;
@@ -345,10 +350,7 @@ TEST(DemCli, RunRetunesAtRebuildsAndLogsTheVariants) {
 TEST(DemCli, AutoVariantKeepsTheDefaultWithinTheMargin) {
   TempDir dir;
   const std::string log = dir.file("variants.csv");
-  const auto r = run_command(contactlab_exe() + " dem run " + config_path() +
-                             " --threads 2 --steps 100 --variant auto --retune --retune-margin 100 "
-                             "--calibration-steps 5 --variant-log " +
-                             log);
+  const auto r = run_retuned("--steps 100 --retune-margin 100", log);
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("variant auto: starts with ordered/static (the model's best, "),
             std::string::npos)
