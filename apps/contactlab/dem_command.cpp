@@ -38,7 +38,7 @@ namespace dem = contactlab::dem;
 class VariantTuning {
  public:
   VariantTuning(const dem::ForceCosts& costs, double margin)
-      : costs_(costs), retuner_(costs, dem::force_variants({1, 4, 16}), margin), margin_(margin) {}
+      : costs_(costs), retuner_(costs, dem::force_variants({1, 4, 16}), margin) {}
 
   void start(dem::Engine& engine) {
     fmt::print("variant auto: force model calibrated by {} runs of {} steps ({:.1f} s)\n",
@@ -93,7 +93,7 @@ class VariantTuning {
           "variant auto: starts with {} (the model's best, {}, predicted {:+.1f} % faster "
           "than {}; margin {:.1f} %)\n",
           dem::to_string(d.variant), dem::to_string(d.best), 100.0 * d.predicted_gain,
-          dem::to_string(engine.settings().force_variant), 100.0 * margin_);
+          dem::to_string(engine.settings().force_variant), 100.0 * retuner_.margin());
     }
     if (!first && !d.switched) return;
     engine.set_force_variant(d.variant);
@@ -109,7 +109,6 @@ class VariantTuning {
 
   dem::ForceCosts costs_;
   dem::ForceRetuner retuner_;
-  double margin_;
   std::uint64_t rebuilds_seen_ = 0, decisions_ = 0;
   double pricing_s_ = 0.0;
   std::vector<Entry> log_;

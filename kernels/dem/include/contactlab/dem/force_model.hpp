@@ -99,6 +99,7 @@ class ForceRetuner {
     bool switched = false;
   };
   Decision decide(const Engine& engine, const ForceVariant& current) const;
+  double margin() const { return margin_; }
 
  private:
   ForceCosts costs_;
