@@ -89,75 +89,91 @@ std::size_t Append(const RangeTask<Real>& task, std::uint32_t* HWY_RESTRICT out)
   constexpr bool kCompressByTable =
       (HWY_TARGET == HWY_AVX2 || HWY_TARGET == HWY_SSE4 || HWY_TARGET == HWY_SSSE3) &&
       hn::MaxLanes(du) >= 2 && hn::MaxLanes(du) <= 8;
+  // The arrays in locals: through `task`, every store to `out` would reload them (it may alias).
+  const Real* HWY_RESTRICT const px = task.x;
+  const Real* HWY_RESTRICT const py = task.y;
+  const Real* HWY_RESTRICT const pz = task.z;
+  [[maybe_unused]] const Real* HWY_RESTRICT const pd = task.d;
   std::size_t found = 0;
-  for (int r = 0; r < task.count; ++r) {
-    const std::uint32_t end = task.ranges[r].end;
-    for (std::uint32_t s = task.ranges[r].begin; s < end; s += static_cast<std::uint32_t>(lanes)) {
-      const auto valid = hn::FirstN(d, end - s);
-      const auto dx = hn::Sub(xi, hn::MaskedLoad(valid, d, task.x + s));
-      const auto dy = hn::Sub(yi, hn::MaskedLoad(valid, d, task.y + s));
-      const auto dz = hn::Sub(zi, hn::MaskedLoad(valid, d, task.z + s));
-      const auto dist_sq = hn::Add(hn::Add(hn::Mul(dx, dx), hn::Mul(dy, dy)), hn::Mul(dz, dz));
-      auto hit = hn::Le(dist_sq, reach_sq);
-      if constexpr (std::is_same_v<Real, float>) {  // the band of pair_test.hpp's float_contact
-        auto maybe = hn::Le(dist_sq, unsure_sq);
-        hit = hn::Le(dist_sq, sure_sq);
-        if constexpr (kDiameters) {
-          const auto sum = hn::Add(di, hn::MaskedLoad(valid, d, task.d + s));
-          const auto t = hn::Sub(hn::Mul(sum, sum), hn::Mul(four, dist_sq));
-          hit = hn::Ge(t, margin);
-          maybe = hn::Ge(t, minus_margin);
-        }
-        hit = hn::And(hit, valid);
-        const auto unsure = hn::AndNot(hit, hn::And(maybe, valid));
-        if (!hn::AllFalse(d, unsure)) [[unlikely]] {  // lane by lane, the unsure ones in double
-          std::uint8_t hit_bits[HWY_MAX_BYTES / 4 + 8] = {},
-                                                    unsure_bits[HWY_MAX_BYTES / 4 + 8] = {};
-          hn::StoreMaskBits(d, hit, hit_bits);
-          hn::StoreMaskBits(d, unsure, unsure_bits);
-          const std::uint32_t count =
-              std::min<std::uint32_t>(static_cast<std::uint32_t>(lanes), end - s);
-          for (std::uint32_t l = 0; l < count; ++l) {
-            bool lane_hit = (hit_bits[l / 8] >> (l % 8)) & 1;
-            if ((unsure_bits[l / 8] >> (l % 8)) & 1) {
-              lane_hit = task.exact->in_contact(task.home, s + l, kDiameters);
-            }
-            out[found] = s + l;
-            found += lane_hit;
-          }
-          continue;
-        }
-      } else if constexpr (kDiameters) {
-        const auto sum = hn::Add(di, hn::MaskedLoad(valid, d, task.d + s));
-        hit = hn::Le(hn::Mul(four, dist_sq), hn::Mul(sum, sum));
+  // The lanes at slots s.. that `valid` holds (whole vectors: all; a range's last vector: those
+  // before its end).
+  auto test_vector = [&](const std::uint32_t s, const std::uint32_t end, const auto valid) {
+    const auto dx = hn::Sub(xi, hn::MaskedLoad(valid, d, px + s));
+    const auto dy = hn::Sub(yi, hn::MaskedLoad(valid, d, py + s));
+    const auto dz = hn::Sub(zi, hn::MaskedLoad(valid, d, pz + s));
+    const auto dist_sq = hn::Add(hn::Add(hn::Mul(dx, dx), hn::Mul(dy, dy)), hn::Mul(dz, dz));
+    auto hit = hn::Le(dist_sq, reach_sq);
+    if constexpr (std::is_same_v<Real, float>) {  // the band of pair_test.hpp's float_contact
+      auto maybe = hn::Le(dist_sq, unsure_sq);
+      hit = hn::Le(dist_sq, sure_sq);
+      if constexpr (kDiameters) {
+        const auto sum = hn::Add(di, hn::MaskedLoad(valid, d, pd + s));
+        const auto t = hn::Sub(hn::Mul(sum, sum), hn::Mul(four, dist_sq));
+        hit = hn::Ge(t, margin);
+        maybe = hn::Ge(t, minus_margin);
       }
       hit = hn::And(hit, valid);
-      const auto slots = hn::Add(iota, hn::Set(du, s));
-      if constexpr (kCompressByTable) {  // at most 8 lanes: the mask is one byte
-        std::uint8_t bits[8] = {};
-        hn::StoreMaskBits(d, hit, bits);
-        if constexpr (hn::MaxLanes(du) == 8) {
-          const auto index = hn::LoadU(du, detail::kCompressLanes[bits[0]].data());
-          hn::StoreU(hn::TableLookupLanes(slots, hn::IndicesFromVec(du, index)), du, out + found);
-        } else {
-          const hn::Repartition<std::uint8_t, decltype(du)> du8;
-          const auto index = hn::LoadU(du8, detail::kCompressBytes[bits[0]].data());
-          hn::StoreU(hn::TableLookupBytes(slots, hn::BitCast(du, index)), du, out + found);
+      const auto unsure = hn::AndNot(hit, hn::And(maybe, valid));
+      if (!hn::AllFalse(d, unsure)) [[unlikely]] {  // lane by lane, the unsure ones in double
+        std::uint8_t hit_bits[HWY_MAX_BYTES / 4 + 8] = {}, unsure_bits[HWY_MAX_BYTES / 4 + 8] = {};
+        hn::StoreMaskBits(d, hit, hit_bits);
+        hn::StoreMaskBits(d, unsure, unsure_bits);
+        const std::uint32_t count =
+            std::min<std::uint32_t>(static_cast<std::uint32_t>(lanes), end - s);
+        for (std::uint32_t l = 0; l < count; ++l) {
+          bool lane_hit = (hit_bits[l / 8] >> (l % 8)) & 1;
+          if ((unsure_bits[l / 8] >> (l % 8)) & 1) {
+            lane_hit = task.exact->in_contact(task.home, s + l, kDiameters);
+          }
+          out[found] = s + l;
+          found += lane_hit;
         }
-        found += static_cast<std::size_t>(std::popcount(bits[0]));
-        continue;
+        return;
       }
-      decltype(hn::FirstN(du, 0)) slot_hit;
-      if constexpr (sizeof(Real) == sizeof(std::uint32_t)) {
-        slot_hit = hn::RebindMask(du, hit);
-      } else {  // double lanes: the mask by its bits onto the half-width slot vector
-        std::uint8_t bits[HWY_MAX_BYTES / 8 + 8] = {};
-        hn::StoreMaskBits(d, hit, bits);
-        slot_hit = hn::LoadMaskBits(du, bits);
-      }
-      hn::StoreU(hn::Compress(slots, slot_hit), du, out + found);
-      found += hn::CountTrue(du, slot_hit);
+    } else if constexpr (kDiameters) {
+      const auto sum = hn::Add(di, hn::MaskedLoad(valid, d, pd + s));
+      hit = hn::Le(hn::Mul(four, dist_sq), hn::Mul(sum, sum));
     }
+    hit = hn::And(hit, valid);
+    const auto slots = hn::Add(iota, hn::Set(du, s));
+    if constexpr (kCompressByTable) {  // at most 8 lanes: the mask is one byte
+      std::uint8_t bits[8] = {};
+      hn::StoreMaskBits(d, hit, bits);
+      if constexpr (hn::MaxLanes(du) == 8) {
+        const auto index = hn::LoadU(du, detail::kCompressLanes[bits[0]].data());
+        hn::StoreU(hn::TableLookupLanes(slots, hn::IndicesFromVec(du, index)), du, out + found);
+      } else {
+        const hn::Repartition<std::uint8_t, decltype(du)> du8;
+        const auto index = hn::LoadU(du8, detail::kCompressBytes[bits[0]].data());
+        hn::StoreU(hn::TableLookupBytes(slots, hn::BitCast(du, index)), du, out + found);
+      }
+      found += static_cast<std::size_t>(std::popcount(bits[0]));
+      return;
+    }
+    decltype(hn::FirstN(du, 0)) slot_hit;
+    if constexpr (sizeof(Real) == sizeof(std::uint32_t)) {
+      slot_hit = hn::RebindMask(du, hit);
+#if HWY_TARGET <= HWY_AVX3
+    } else if constexpr (true) {  // AVX-512: both are the same 8-bit mask register
+      slot_hit.raw = hit.raw;
+#endif
+    } else {  // double lanes: the mask by its bits onto the half-width slot vector
+      std::uint8_t bits[HWY_MAX_BYTES / 8 + 8] = {};
+      hn::StoreMaskBits(d, hit, bits);
+      slot_hit = hn::LoadMaskBits(du, bits);
+    }
+    hn::StoreU(hn::Compress(slots, slot_hit), du, out + found);
+    found += hn::CountTrue(du, slot_hit);
+  };
+  // Whole vectors under a mask fixed outside the loop, then the part-filled last one: no mask
+  // is computed per vector.
+  const auto whole = hn::FirstN(d, lanes);
+  const auto step = static_cast<std::uint32_t>(lanes);
+  for (int r = 0; r < task.count; ++r) {
+    const std::uint32_t end = task.ranges[r].end;
+    std::uint32_t s = task.ranges[r].begin;
+    for (; end - s >= step; s += step) test_vector(s, end, whole);  // begin <= end
+    if (s < end) test_vector(s, end, hn::FirstN(d, end - s));
   }
   return found;
 }
