@@ -95,25 +95,38 @@ std::size_t Append(const RangeTask<Real>& task, std::uint32_t* HWY_RESTRICT out)
   const Real* HWY_RESTRICT const pz = task.z;
   [[maybe_unused]] const Real* HWY_RESTRICT const pd = task.d;
   std::size_t found = 0;
-  // The lanes at slots s.. that `valid` holds (whole vectors: all; a range's last vector: those
-  // before its end).
-  auto test_vector = [&](const std::uint32_t s, const std::uint32_t end, const auto valid) {
-    const auto dx = hn::Sub(xi, hn::MaskedLoad(valid, d, px + s));
-    const auto dy = hn::Sub(yi, hn::MaskedLoad(valid, d, py + s));
-    const auto dz = hn::Sub(zi, hn::MaskedLoad(valid, d, pz + s));
+  // The lanes at slots s.. that `valid` holds: a whole vector (kWhole: every lane, plain loads;
+  // AVX2 keeps a masked load a masked load even under an all-true mask) or a range's last
+  // vector (the lanes before its end).
+  auto test_vector = [&](const std::uint32_t s, const std::uint32_t end, const auto valid,
+                         const auto whole_tag) {
+    constexpr bool kWhole = decltype(whole_tag)::value;
+    auto load = [&](const Real* p) {
+      if constexpr (kWhole) {
+        return hn::LoadU(d, p + s);
+      } else {
+        return hn::MaskedLoad(valid, d, p + s);
+      }
+    };
+    const auto dx = hn::Sub(xi, load(px));
+    const auto dy = hn::Sub(yi, load(py));
+    const auto dz = hn::Sub(zi, load(pz));
     const auto dist_sq = hn::Add(hn::Add(hn::Mul(dx, dx), hn::Mul(dy, dy)), hn::Mul(dz, dz));
     auto hit = hn::Le(dist_sq, reach_sq);
     if constexpr (std::is_same_v<Real, float>) {  // the band of pair_test.hpp's float_contact
       auto maybe = hn::Le(dist_sq, unsure_sq);
       hit = hn::Le(dist_sq, sure_sq);
       if constexpr (kDiameters) {
-        const auto sum = hn::Add(di, hn::MaskedLoad(valid, d, pd + s));
+        const auto sum = hn::Add(di, load(pd));
         const auto t = hn::Sub(hn::Mul(sum, sum), hn::Mul(four, dist_sq));
         hit = hn::Ge(t, margin);
         maybe = hn::Ge(t, minus_margin);
       }
-      hit = hn::And(hit, valid);
-      const auto unsure = hn::AndNot(hit, hn::And(maybe, valid));
+      if constexpr (!kWhole) {
+        hit = hn::And(hit, valid);
+        maybe = hn::And(maybe, valid);
+      }
+      const auto unsure = hn::AndNot(hit, maybe);
       if (!hn::AllFalse(d, unsure)) [[unlikely]] {  // lane by lane, the unsure ones in double
         std::uint8_t hit_bits[HWY_MAX_BYTES / 4 + 8] = {}, unsure_bits[HWY_MAX_BYTES / 4 + 8] = {};
         hn::StoreMaskBits(d, hit, hit_bits);
@@ -131,10 +144,10 @@ std::size_t Append(const RangeTask<Real>& task, std::uint32_t* HWY_RESTRICT out)
         return;
       }
     } else if constexpr (kDiameters) {
-      const auto sum = hn::Add(di, hn::MaskedLoad(valid, d, pd + s));
+      const auto sum = hn::Add(di, load(pd));
       hit = hn::Le(hn::Mul(four, dist_sq), hn::Mul(sum, sum));
     }
-    hit = hn::And(hit, valid);
+    if constexpr (!kWhole) hit = hn::And(hit, valid);
     const auto slots = hn::Add(iota, hn::Set(du, s));
     if constexpr (kCompressByTable) {  // at most 8 lanes: the mask is one byte
       std::uint8_t bits[8] = {};
@@ -172,8 +185,9 @@ std::size_t Append(const RangeTask<Real>& task, std::uint32_t* HWY_RESTRICT out)
   for (int r = 0; r < task.count; ++r) {
     const std::uint32_t end = task.ranges[r].end;
     std::uint32_t s = task.ranges[r].begin;
-    for (; end - s >= step; s += step) test_vector(s, end, whole);  // begin <= end
-    if (s < end) test_vector(s, end, hn::FirstN(d, end - s));
+    for (; end - s >= step; s += step)
+      test_vector(s, end, whole, std::true_type{});  // begin <= end
+    if (s < end) test_vector(s, end, hn::FirstN(d, end - s), std::false_type{});
   }
   return found;
 }
