@@ -166,8 +166,17 @@ void CellRegistry::assign(const CellGrid& grid, const Scene& scene, SortedCoordi
     sorted->z.resize(n);
     sorted->diameter.resize(scene.diameter.size());
     const bool diameters = scene.has_diameters();
+    // The reads are at random: they are requested kAhead slots early, so that their misses
+    // overlap instead of each waiting for the last.
+    constexpr std::size_t kAhead = 16;
 #pragma omp parallel for schedule(static) num_threads(static_cast <int>(team))
     for (std::size_t s = 0; s < n; ++s) {
+      if (s + kAhead < n) {
+        const std::uint32_t ahead = slot_particle[s + kAhead];
+        __builtin_prefetch(scene.x.data() + ahead);
+        __builtin_prefetch(scene.y.data() + ahead);
+        __builtin_prefetch(scene.z.data() + ahead);
+      }
       const std::uint32_t i = slot_particle[s];
       sorted->x[s] = scene.x[i];
       sorted->y[s] = scene.y[i];
@@ -245,10 +254,19 @@ void CellRegistry::sort_and_index(const CellGrid& grid, const Scene& scene, std:
     }
     // Slots in key order. A cell starts at slot s when s == 0 or slot s - 1 has another key.
     auto starts_cell = [&](std::size_t s) { return s == 0 || in[s - 1].key() != in[s].key(); };
+    // Each cell's occupancy is counted by the thread where it starts: from one start to the
+    // next, and for the last cell of the range up to its end, possibly in the next range.
+    auto count_cell = [&](std::size_t first, std::size_t end) {
+      largest = std::max(largest, static_cast<std::uint32_t>(end - first));
+      squares += std::uint64_t{end - first} * (end - first);
+    };
     std::uint64_t cells_here = 0;
+    std::size_t cell_start = e;  // of the last cell started in this range; e = none yet
     for (std::size_t s = b; s < e; ++s) {
       slot_particle[s] = in[s].index();
       if (!starts_cell(s)) continue;
+      if (cell_start != e) count_cell(cell_start, s);
+      cell_start = s;
       ++cells_here;
       const std::uint64_t slot_key = in[s].key();
       if (!hashed) {
@@ -259,10 +277,11 @@ void CellRegistry::sort_and_index(const CellGrid& grid, const Scene& scene, std:
           cell_begin[k] = static_cast<std::uint32_t>(s);
         }
       }
-      std::size_t end = s + 1;  // the cell's run, possibly into the next thread's range
-      while (end < n && in[end].key() == slot_key) ++end;
-      largest = std::max(largest, static_cast<std::uint32_t>(end - s));
-      squares += std::uint64_t{end - s} * (end - s);
+    }
+    if (cell_start != e) {
+      std::size_t end = e;
+      while (end < n && in[end].key() == in[cell_start].key()) ++end;
+      count_cell(cell_start, end);
     }
     if (!hashed && t + 1 == size) {  // the keys past the last particle's (all when there is none)
       const std::uint64_t after = n == 0 ? 0 : in[n - 1].key() + 1;

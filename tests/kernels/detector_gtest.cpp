@@ -282,5 +282,75 @@ TEST(Detector, ReusedDetectorGivesFreshResults) {
   }
 }
 
+// The full stencil's first rows are written into the contact list's storage from the last run
+// where thread 0 visits the first homes in row order; they must come out right when that
+// storage is too small (the rows move to the buffer's own memory), fits them, or is shared
+// with other threads' rows, and after half-stencil runs that use the storage differently.
+TEST(Detector, RowsWrittenInPlaceMatchTheBruteForce) {
+  struct Step {
+    int n;
+    double d;
+    const char* variant;
+    int threads;
+  };
+  const std::vector<Step> steps = {
+      {500, 0.1, "particle/sorted/full/static", 1},     // nothing kept yet
+      {3000, 0.1, "particle/sorted/full/static", 1},    // more rows than the storage holds
+      {3000, 0.1, "particle/sorted/full/static", 1},    // in place
+      {3000, 0.1, "particle/sorted/full/static", 3},    // thread 0 in place, the others copied
+      {3000, 0.1, "cell/sorted/full/static", 2},        // the cell loop over sorted particles
+      {3000, 0.1, "particle/unsorted/full/static", 2},  // input order
+      {3000, 0.1, "cell/unsorted/full/static", 2},      // homes not in row order: copied
+      {3000, 0.1, "particle/sorted/full/static,5", 2},  // chunks: copied
+      {3000, 0.1, "particle/sorted/half/static", 2},
+      {200, 0.1, "particle/sorted/full/dynamic,3", 1},  // fewer rows than last time
+      {3000, 0.12, "particle/sorted/full/static/float", 1},
+  };
+  ContactDetector detector;
+  for (std::size_t k = 0; k < steps.size(); ++k) {
+    const Step& step = steps[k];
+    SCOPED_TRACE("step " + std::to_string(k) + ": " + step.variant +
+                 " N=" + std::to_string(step.n) + " threads=" + std::to_string(step.threads));
+    const Scene scene = uniform_scene(step.n, step.d, 11);
+    DetectOptions options;
+    options.variant = parse_variant(step.variant);
+    options.diameter = step.d;
+    options.threads = step.threads;
+    detector.run(scene, options);
+    const ContactList canonical = detector.canonical_contacts();
+    EXPECT_TRUE(well_formed(canonical));
+    EXPECT_TRUE(same_contacts(canonical, brute_force_contacts(scene, step.d)));
+  }
+}
+
+TEST(PartnerBuffer, BorrowedStorageIsUsedUntilItFillsThenLeftWithItsContents) {
+  std::vector<std::uint32_t> storage(16, 0);
+  detail::PartnerBuffer buffer;
+  buffer.borrow(storage.data(), storage.size());
+  std::uint32_t* place = buffer.tail(10);
+  EXPECT_EQ(place, storage.data());
+  for (std::uint32_t i = 0; i < 10; ++i) place[i] = 100 + i;
+  buffer.advance(10);
+  EXPECT_TRUE(buffer.borrowing());
+  place = buffer.tail(10);  // 20 entries do not fit in 16
+  EXPECT_FALSE(buffer.borrowing());
+  EXPECT_NE(buffer.data(), storage.data());
+  for (std::uint32_t i = 0; i < 10; ++i) EXPECT_EQ(buffer.data()[i], 100 + i);
+  place[0] = 7;
+  buffer.advance(1);
+  EXPECT_EQ(buffer.size(), 11u);
+  EXPECT_EQ(storage[10], 0u);  // the borrowed storage past what was written is untouched
+
+  buffer.borrow(storage.data(), storage.size());
+  EXPECT_EQ(buffer.size(), 0u);
+  buffer.stop_borrowing();
+  EXPECT_FALSE(buffer.borrowing());
+  EXPECT_EQ(buffer.size(), 0u);
+  buffer.tail(1)[0] = 5;  // memory of its own again
+  buffer.advance(1);
+  EXPECT_NE(buffer.data(), storage.data());
+  EXPECT_EQ(buffer.data()[0], 5u);
+}
+
 }  // namespace
 }  // namespace contactlab::test

@@ -33,6 +33,8 @@ struct DenseCellIndex {
   SlotRange key_range(int /*at*/, std::uint64_t first, std::uint64_t last) const {
     return {begin[first], begin[last + 1]};
   }
+  // The slots of the cell with key k (a home's own cell).
+  SlotRange cell_slots(std::uint64_t k) const { return {begin[k], begin[k + 1]}; }
 };
 
 // The occupied cells (OccupiedCells), found two ways, chosen by how the loop visits homes:
@@ -48,7 +50,9 @@ struct DenseCellIndex {
 struct HashedCellIndex {
   const OccupiedCells* cells;
   bool homes_in_key_order;
-  mutable std::array<std::uint64_t, 27> cursor{};  // per stencil position: its last answer
+  // Per stencil position (at most 27 with Morton keys) its last answer, then the home cell's.
+  static constexpr int kHomeCursor = 27;
+  mutable std::array<std::uint64_t, kHomeCursor + 1> cursor{};
 
   // The cell loop runs over the occupied cells only, in key order.
   std::uint64_t cell_iterations() const { return cells->size(); }
@@ -78,6 +82,7 @@ struct HashedCellIndex {
     while (end < m && keys[end] <= last) ++end;
     return {cells->begin[c], cells->begin[end]};
   }
+  SlotRange cell_slots(std::uint64_t k) const { return key_range(kHomeCursor, k, k); }
 
  private:
   // The first place in the key list whose key is >= target, galloping from `hint`.

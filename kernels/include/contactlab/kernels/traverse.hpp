@@ -234,20 +234,28 @@ void traverse_with(const Spec& spec, const Index& index, const Layout& layout, O
   auto loops = [&](auto iteration_at) {
     if (spec.loop == LoopKind::kParticle) {
       std::uint64_t cached_key = UINT64_MAX;  // ranges are reused while the cell stays the same
+      // The cached cell's slots: a home among them is in that cell, and its cell coordinates
+      // (three multiplications and floors) need not be found again.
+      SlotRange cached_cell{0, 0};
       // Only this process's iterations enter the loop, so its threads' schedule divides them.
       const std::uint64_t iterations = spec.blocks.size(n);
 #pragma omp for schedule(runtime) nowait
       for (std::uint64_t k = 0; k < iterations; ++k) {
         const auto h = static_cast<std::uint32_t>(iteration_at(k));
         if (!all_owned && !spec.homes.contains(layout.input_of(h))) continue;
-        const auto home = grid.coords_of(layout.cell_x[h], layout.cell_y[h], layout.cell_z[h]);
-        const std::uint64_t key = index.key(grid, home[0], home[1], home[2]);
-        const bool built = key != cached_key;
-        if (built) {
-          nb.build(grid, index, stencil, home);
-          cached_key = key;
+        const std::uint32_t s_h = layout.slot_of(h);
+        bool built = false;
+        if (s_h < cached_cell.begin || s_h >= cached_cell.end) {
+          const auto home = grid.coords_of(layout.cell_x[h], layout.cell_y[h], layout.cell_z[h]);
+          const std::uint64_t key = index.key(grid, home[0], home[1], home[2]);
+          built = key != cached_key;
+          if (built) {
+            nb.build(grid, index, stencil, home);
+            cached_key = key;
+            cached_cell = index.cell_slots(key);
+          }
         }
-        visit(h, layout.slot_of(h), h, built);
+        visit(h, s_h, h, built);
       }
     } else {
       // One iteration per cell key (dense index) or per occupied cell (hashed index).
