@@ -21,6 +21,18 @@ namespace contactlab {
 
 int resolve_threads(int requested) { return requested > 0 ? requested : omp_get_max_threads(); }
 
+bool writes_first_rows_in_place(const Variant& variant, int threads) {
+  const bool rows_in_visiting_order =
+      variant.loop == LoopKind::kParticle || variant.order != Order::kUnsorted;
+  const bool first_iterations = threads == 1 || (variant.schedule.kind == ScheduleKind::kStatic &&
+                                                 variant.schedule.chunk == 0);
+  return variant.stencil == Stencil::kFull && rows_in_visiting_order && first_iterations;
+}
+
+double copied_output_share(const Variant& variant, int threads) {
+  return writes_first_rows_in_place(variant, threads) ? 1.0 - 1.0 / threads : 1.0;
+}
+
 namespace detail {
 
 PartnerBuffer::PartnerBuffer(PartnerBuffer&& other) noexcept
@@ -124,16 +136,9 @@ void ContactDetector::detect(const CellGrid& grid, const Layout& layout, const P
   range_sums_.assign(threads, 0);
   run.thread_busy_s.assign(threads, 0.0);
   std::vector<std::uint64_t> thread_tests(threads, 0);
-  // Thread 0's finds are the first rows as they stand when it visits the first homes in row
-  // order: with the full stencil (no reverse entries between rows), homes in working-id order
-  // (the particle loop, or the cell loop over sorted particles), and thread 0 holding the
-  // loop's first iterations (one thread, or a static schedule without a chunk size). It then
-  // writes them into the contact list's storage, kept from the last run: 110 MB not copied on
-  // the paper's scene at one thread.
-  const bool rows_in_visiting_order = variant.loop == LoopKind::kParticle || Layout::kIdsAreSlots;
-  const bool first_iterations = threads == 1 || (variant.schedule.kind == ScheduleKind::kStatic &&
-                                                 variant.schedule.chunk == 0);
-  const bool rows_in_place = !half && rows_in_visiting_order && first_iterations;
+  // Thread 0's finds are then the first rows as they stand: written into the contact list's
+  // storage kept from the last run, 110 MB are not copied on the paper's scene at one thread.
+  const bool rows_in_place = writes_first_rows_in_place(variant, threads);
   if (rows_in_place) contacts_.partners.resize(contacts_.partners.capacity());
 
   omp_set_schedule(to_omp(variant.schedule.kind), variant.schedule.chunk);

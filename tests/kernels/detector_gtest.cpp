@@ -323,6 +323,22 @@ TEST(Detector, RowsWrittenInPlaceMatchTheBruteForce) {
   }
 }
 
+TEST(Detector, CopiedOutputShareFollowsWhereThreadZeroWritesInPlace) {
+  auto share = [](const char* variant, int threads) {
+    return copied_output_share(parse_variant(variant), threads);
+  };
+  EXPECT_EQ(share("particle/sorted/full/static", 1), 0.0);
+  EXPECT_EQ(share("particle/sorted/full/dynamic,64", 1), 0.0);  // one thread visits in order
+  EXPECT_EQ(share("particle/sorted/full/static", 2), 0.5);
+  EXPECT_EQ(share("cell/sorted/full/static", 4), 0.75);
+  EXPECT_EQ(share("particle/unsorted/full/static/float", 4), 0.75);
+  EXPECT_EQ(share("particle/sorted/full/static,200", 2), 1.0);  // chunks: thread 0 not first
+  EXPECT_EQ(share("particle/sorted/full/guided,8", 2), 1.0);
+  EXPECT_EQ(share("cell/unsorted/full/static", 1), 1.0);    // homes not in row order
+  EXPECT_EQ(share("particle/sorted/half/static", 1), 1.0);  // reverse entries between rows
+  EXPECT_TRUE(writes_first_rows_in_place(parse_variant("cell/morton/full/static"), 2));
+}
+
 TEST(PartnerBuffer, BorrowedStorageIsUsedUntilItFillsThenLeftWithItsContents) {
   std::vector<std::uint32_t> storage(16, 0);
   detail::PartnerBuffer buffer;

@@ -35,9 +35,11 @@ std::vector<double> loop_samples(DetectionKernel& kernel, const Variant& variant
 }
 
 // The output's entry-weighted degree (as the model estimates it) and the assembly's seconds
-// per entry per thread (assembly x threads / entries: each thread writes the rows of its own
-// finds) of one structure on one scene, the median of kCalibrationSamples static runs after a
-// warm-up.
+// per copied entry per thread (assembly x threads / copied entries: each thread writes the
+// rows of its own finds) of one structure on one scene, the median of kCalibrationSamples
+// static runs after a warm-up. Where none is copied (the full stencil at one thread writes its
+// rows in place, and the model prices no output for it) the assembly's rest, its row offsets,
+// is stored per entry: a floor for predictions at more threads from this point alone.
 std::pair<double, double> assembly_per_entry(DetectionKernel& kernel, const Variant& structure,
                                              int threads) {
   Variant v = structure;
@@ -45,13 +47,14 @@ std::pair<double, double> assembly_per_entry(DetectionKernel& kernel, const Vari
   kernel.run(v, threads);
   std::vector<double> per_entry;
   std::uint64_t entries = 0;
+  const double share = kernel.copied_output_share(v, threads);
   for (int k = 0; k < kCalibrationSamples; ++k) {
     const KernelRun r = kernel.run(v, threads);
     for (const auto& [name, count] : r.counts) {
       if (name == "contact_pairs") entries = 2 * count;
     }
-    per_entry.push_back(
-        entries == 0 ? 0.0 : r.phase_s("assembly") * threads / static_cast<double>(entries));
+    const double copied = static_cast<double>(entries) * (share > 0.0 ? share : 1.0);
+    per_entry.push_back(entries == 0 ? 0.0 : r.phase_s("assembly") * threads / copied);
   }
   return {kernel.estimated_output().degree, median(per_entry)};
 }

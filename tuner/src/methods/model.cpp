@@ -14,13 +14,14 @@ namespace {
 
 WorkView view_of(const LoopWork& work) { return {work.tests, work.homes, work.builds}; }
 
-// The model's best schedule for one structure: every kind, every chunk of the grid. A kernel
-// run by several processes (MPI ranks, each on its own work) is as fast as its slowest: each
-// prediction is the maximum over the kernel's parts before the choice, so every part chooses
-// alike.
+// The model's best schedule for one structure: every kind, every chunk of the grid, each with
+// the loop's time and its share of `output_s` (the time to copy the whole output after the
+// loop; a schedule may let the kernel write part of it in place). A kernel run by several
+// processes (MPI ranks, each on its own work) is as fast as its slowest: each prediction is
+// the maximum over the kernel's parts before the choice, so every part chooses alike.
 std::pair<Variant, double> best_schedule(MeasuredKernel& kernel, const Variant& structure,
                                          WorkView work, int threads, const MachineCosts& costs,
-                                         const std::vector<int>& grid) {
+                                         const std::vector<int>& grid, double output_s) {
   const PreparedWork prepared(work);
   const std::array kinds{ScheduleKind::kStatic, ScheduleKind::kDynamic, ScheduleKind::kGuided};
   std::vector<std::vector<int>> chunks;
@@ -30,7 +31,9 @@ std::pair<Variant, double> best_schedule(MeasuredKernel& kernel, const Variant& 
     if (kind == ScheduleKind::kStatic) candidates.insert(candidates.begin(), 0);  // block
     for (const CandidatePrediction& c :
          predict_best_chunk(prepared, threads, kind, costs, candidates).candidates) {
-      seconds.push_back(c.predicted_seconds);
+      const double share =
+          kernel.copied_output_share(with_schedule(structure, kind, c.chunk), threads);
+      seconds.push_back(c.predicted_seconds + output_s * share);
     }
     chunks.push_back(std::move(candidates));
   }
@@ -77,10 +80,11 @@ class ModelMethod final : public TuningMethod {
                         structure,
                         0.0,
                         calibrated ? found->second.output : std::vector<OutputCost>{}};
-      std::tie(s.model_choice, s.predicted_s) = best_schedule(
-          state.kernel, structure, view_of(s.work), state.threads, s.costs, options.chunk_grid);
-      s.output_s = output_seconds(s.output, output, state.threads);
-      s.predicted_s += s.output_s;
+      const double copy_all_s = output_seconds(s.output, output, state.threads);
+      std::tie(s.model_choice, s.predicted_s) =
+          best_schedule(state.kernel, structure, view_of(s.work), state.threads, s.costs,
+                        options.chunk_grid, copy_all_s);
+      s.output_s = copy_all_s * state.kernel.copied_output_share(s.model_choice, state.threads);
       table.push_back({{"variant", to_string(s.model_choice)},
                        {"predicted_s", s.predicted_s},
                        {"output_s", s.output_s}});
@@ -96,10 +100,11 @@ class ModelMethod final : public TuningMethod {
     // Other thread counts, from the model's structure.
     const PricedStructure& best = *state.model_best;
     for (const int p : options.predict_threads) {
-      const auto [variant, seconds] = best_schedule(state.kernel, best.variant, view_of(best.work),
-                                                    p, best.costs, options.chunk_grid);
+      const auto [variant, seconds] =
+          best_schedule(state.kernel, best.variant, view_of(best.work), p, best.costs,
+                        options.chunk_grid, output_seconds(best.output, output, p));
       state.report.predictions.push_back(
-          {p, to_string(variant), seconds + output_seconds(best.output, output, p),
+          {p, to_string(variant), seconds,
            p > omp_get_num_procs() ? "predicted (model only: more threads than this machine has)"
                                    : "predicted (model only)"});
     }

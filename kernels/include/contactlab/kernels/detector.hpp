@@ -87,6 +87,16 @@ class DetectionObserver {
   virtual void region_end() {}
 };
 
+// Whether thread 0 of a detection writes its rows in place, into the contact list's storage
+// kept from the last run, so that after the loop only the other threads' rows are copied: with
+// the full stencil (no reverse entries between rows), homes visited in row order (the particle
+// loop, or the cell loop over sorted particles) and thread 0 holding the loop's first
+// iterations (one thread, or a static schedule without a chunk size).
+bool writes_first_rows_in_place(const Variant& variant, int threads);
+// The share of the output entries the assembly copies after the loop: 1 - 1/threads where
+// thread 0 writes in place, else 1 (the tuner prices the output per copied entry).
+double copied_output_share(const Variant& variant, int threads);
+
 // The one meaning of "threads = 0" everywhere (detect, sweep, tune, --variant auto and the
 // tuning cache's keys): OpenMP's default team size, omp_get_max_threads(), which follows
 // OMP_NUM_THREADS. Positive counts are returned as they are.

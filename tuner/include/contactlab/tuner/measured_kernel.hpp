@@ -40,6 +40,10 @@ class MeasuredKernel {
   // The output (its entries and their degree), estimated without a timed run, for the model's
   // output term (output_cost.hpp); no entries: no such term.
   virtual OutputEstimate estimated_output() { return {}; }
+  // The share of the output's entries a run of `variant` copies after the loop (the output
+  // cost is priced and calibrated per copied entry). All of them, unless the kernel writes
+  // some rows in place.
+  virtual double copied_output_share(const Variant& /*variant*/, int /*threads*/) { return 1.0; }
 
   // A kernel run by several processes together (MPI ranks, each on its own part) is as fast as
   // its slowest part, and every part must take the same decisions (the same runs in the same
@@ -77,6 +81,9 @@ class DetectionKernel final : public MeasuredKernel {
   LoopWork iteration_work(const Variant& variant, int threads) override;
   std::pair<std::uint64_t, std::uint64_t> wrong_results() override;
   OutputEstimate estimated_output() override;
+  double copied_output_share(const Variant& variant, int threads) override {
+    return contactlab::copied_output_share(variant, threads);
+  }
 
  private:
   DetectOptions options_for(const Variant& variant, int threads) const;
