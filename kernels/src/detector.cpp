@@ -136,10 +136,24 @@ void ContactDetector::detect(const CellGrid& grid, const Layout& layout, const P
   range_sums_.assign(threads, 0);
   run.thread_busy_s.assign(threads, 0.0);
   std::vector<std::uint64_t> thread_tests(threads, 0);
-  // Thread 0's finds are then the first rows as they stand: written into the contact list's
-  // storage kept from the last run, 110 MB are not copied on the paper's scene at one thread.
+  // Where thread 0's finds are the first rows as they stand, it writes them into the contact
+  // list's storage: 110 MB not copied on the paper's scene at one thread. The storage is kept
+  // from the last run; a first run reserves twice the entries the cell occupancies lead one to
+  // expect (about 27 (sum occupancy^2 - n) candidates, 0.155 of them within a sphere of
+  // diameter D in cells at least D wide), address space only until written. A scene with
+  // more moves thread 0 to a buffer of its own.
   const bool rows_in_place = writes_first_rows_in_place(variant, threads);
-  if (rows_in_place) contacts_.partners.resize(contacts_.partners.capacity());
+  if (rows_in_place) {
+    const double candidates = 27.0 * static_cast<double>(registry_.occupancy_squares - n);
+    const auto expected = static_cast<std::size_t>(2.0 * 0.155 * candidates);
+    if (contacts_.partners.capacity() < expected) {
+      try {
+        contacts_.partners.reserve(expected);
+      } catch (const std::bad_alloc&) {  // too large to reserve here: copied as before
+      }
+    }
+    contacts_.partners.resize(contacts_.partners.capacity());
+  }
 
   omp_set_schedule(to_omp(variant.schedule.kind), variant.schedule.chunk);
   if (options.observer) options.observer->region_begin(threads);
