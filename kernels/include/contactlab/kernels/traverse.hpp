@@ -100,8 +100,11 @@ struct NeighbourRanges {
         if (r == stencil.own) own = count;
         const SlotRange range =
             index.key_range(r, index.key(grid, x_lo, cy, cz), index.key(grid, x_hi, cy, cz));
-        if (range.begin == range.end) continue;  // never the own row: it holds the home
-        ranges[count++] = range;
+        // Kept only if it holds a particle (never empty: the own row, which holds the home),
+        // without a branch: around the sparse cells that make most of a clustered scene's
+        // homes, whether a row is empty is a coin toss.
+        ranges[count] = range;
+        count += range.begin != range.end;
         candidates += range.end - range.begin;
         continue;
       }
@@ -110,9 +113,9 @@ struct NeighbourRanges {
       for (int cx = x_lo; cx <= x_hi; ++cx) {
         const std::uint64_t key = x_part[cx - home[0] + 1] | yz_part;
         const SlotRange range = index.key_range(3 * r + cx - home[0] + 1, key, key);
-        if (range.begin == range.end) continue;  // never the home cell
-        if (r == stencil.own && cx == home[0]) own = count;
-        ranges[count++] = range;
+        if (r == stencil.own && cx == home[0]) own = count;  // the home cell is never empty
+        ranges[count] = range;
+        count += range.begin != range.end;  // as above, without a branch
         candidates += range.end - range.begin;
       }
     }
