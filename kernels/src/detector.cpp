@@ -137,18 +137,22 @@ void ContactDetector::detect(const CellGrid& grid, const Layout& layout, const P
   run.thread_busy_s.assign(threads, 0.0);
   std::vector<std::uint64_t> thread_tests(threads, 0);
   // Where thread 0's finds are the first rows as they stand, it writes them into the contact
-  // list's storage: 110 MB not copied on the paper's scene at one thread. The storage is kept
-  // from the last run; a first run reserves twice the entries the cell occupancies lead one to
-  // expect (about 27 (sum occupancy^2 - n) candidates, 0.155 of them within a sphere of
-  // diameter D in cells at least D wide), address space only until written. A scene with
-  // more moves thread 0 to a buffer of its own.
+  // list's storage: 110 MB not copied on the paper's scene at one thread. The storage is
+  // reserved for the larger of the last run's entries (plus what its last home may append: the
+  // candidates of 27 cells of the fullest, and the SIMD slack) and twice the entries the cell
+  // occupancies lead one to expect (about 27 (sum occupancy^2 - n) candidates, 0.155 of them
+  // within a sphere of diameter D in cells at least D wide: a first run's room); address space
+  // only until written. A scene with more moves thread 0 to a buffer of its own.
   const bool rows_in_place = writes_first_rows_in_place(variant, threads);
   if (rows_in_place) {
     const double candidates = 27.0 * static_cast<double>(registry_.occupancy_squares - n);
-    const auto expected = static_cast<std::size_t>(2.0 * 0.155 * candidates);
-    if (contacts_.partners.capacity() < expected) {
+    const std::size_t wanted = std::max(
+        contacts_.partners.size() + 27 * std::size_t{registry_.max_occupancy} + simd::kAppendSlack,
+        static_cast<std::size_t>(2.0 * 0.155 * candidates));
+    if (contacts_.partners.capacity() < wanted) {
+      contacts_.partners.clear();  // the last run's rows need not move along
       try {
-        contacts_.partners.reserve(expected);
+        contacts_.partners.reserve(wanted);
       } catch (const std::bad_alloc&) {  // too large to reserve here: copied as before
       }
     }
@@ -230,10 +234,6 @@ void ContactDetector::assemble_rows(int tid, int threads, bool half) {
 #pragma omp single
   {
     offsets[0] = 0;
-    // Room for thread 0 to find as many in place next time: its last home may append its
-    // candidates (at most 27 cells of the fullest) and the SIMD slack past its last find.
-    contacts_.partners.reserve(offsets[n] + 27 * std::size_t{registry_.max_occupancy} +
-                               simd::kAppendSlack);
     contacts_.partners.resize(offsets[n]);
   }
   // A buffer still borrowing the contact list's storage holds its rows in place (resize keeps
