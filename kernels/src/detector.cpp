@@ -138,16 +138,17 @@ void ContactDetector::detect(const CellGrid& grid, const Layout& layout, const P
   std::vector<std::uint64_t> thread_tests(threads, 0);
   // Where thread 0's finds are the first rows as they stand, it writes them into the contact
   // list's storage: 110 MB not copied on the paper's scene at one thread. The storage is
-  // reserved for the larger of the last run's entries (plus what its last home may append: the
-  // candidates of 27 cells of the fullest, and the SIMD slack) and twice the entries the cell
-  // occupancies lead one to expect (about 27 (sum occupancy^2 - n) candidates, 0.155 of them
+  // reserved for the larger of the last run's entries (plus what its last homes may append: a
+  // block of them, each with the candidates of 27 cells of the fullest) and twice the entries the
+  // cell occupancies lead one to expect (about 27 (sum occupancy^2 - n) candidates, 0.155 of them
   // within a sphere of diameter D in cells at least D wide: a first run's room); address space
   // only until written. A scene with more moves thread 0 to a buffer of its own.
   const bool rows_in_place = writes_first_rows_in_place(variant, threads);
   if (rows_in_place) {
     const double candidates = 27.0 * static_cast<double>(registry_.occupancy_squares - n);
     const std::size_t wanted = std::max(
-        contacts_.partners.size() + 27 * std::size_t{registry_.max_occupancy} + simd::kAppendSlack,
+        contacts_.partners.size() +
+            simd::kBlockHomes * (27 * std::size_t{registry_.max_occupancy}) + simd::kAppendSlack,
         static_cast<std::size_t>(2.0 * 0.155 * candidates));
     if (contacts_.partners.capacity() < wanted) {
       contacts_.partners.clear();  // the last run's rows need not move along
@@ -174,7 +175,7 @@ void ContactDetector::detect(const CellGrid& grid, const Layout& layout, const P
     }
     mine.homes.clear();
     mine.homes.reserve(n);
-    ContactOp<PairTest> op(test, mine.partners, mine.homes, found_count_.data());
+    ContactOp<PairTest> op(test, mine, found_count_.data());
     if (options.observer) options.observer->thread_begin(tid);
     const double loop_start = omp_get_wtime();
     traversal::traverse(spec, layout, op);

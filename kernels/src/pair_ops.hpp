@@ -4,7 +4,9 @@
 // only counts work (WorkCountOp). See traverse.hpp for the op protocol.
 #pragma once
 
+#include <array>
 #include <cstdint>
+#include <cstring>
 #include <type_traits>
 #include <vector>
 
@@ -59,8 +61,9 @@ struct ContactTest {
 // slower at one thread on SIMD lanes).
 inline constexpr std::uint64_t kSimdFrom = 16;
 
-// The contact test of pair_test.hpp for a home's candidate slot ranges at once, on SIMD lanes
-// (simd_pair_tests.hpp): sorted layouts only, where slots are working ids.
+// The contact test of pair_test.hpp for the homes of one cell at once, against their stencil's
+// slot ranges, on SIMD lanes (simd_pair_tests.hpp): sorted layouts only, where slots are working
+// ids.
 template <class Real, bool kDiameters>
 struct SimdContactTest {
   const Real *x, *y, *z, *d;
@@ -72,32 +75,35 @@ struct SimdContactTest {
   // a target was named (simd_forced(): tests, benchmarks of a target).
   std::uint64_t scalar_below;
 
-  struct ForHome {
-    simd::RangeTask<Real> task;
-    std::uint64_t candidates, scalar_below;
-    std::size_t append(const SlotRange* ranges, int count, std::uint32_t* out) {
-      if (candidates < scalar_below) {  // ContactTest's decision: the same contacts, bit for bit
-        const ContactTest<Real, kDiameters> scalar{task.d, task.reach_sq, *task.exact, task.band};
-        const auto test = scalar.for_home(task.home);
-        std::size_t found = 0;
-        for (int r = 0; r < count; ++r) {
-          for (std::uint32_t j = ranges[r].begin; j < ranges[r].end; ++j) {
-            out[found] = j;
-            found += test(j, task.xi - task.x[j], task.yi - task.y[j], task.zi - task.z[j]);
-          }
+  // Writes home b's partners to out[b] and their count to found[b] (homes: one cell's, in slot
+  // order; each out[b] has room for the home's tests + kAppendSlack).
+  void append_block(const Home* homes, int count, const traversal::NeighbourRanges& nb, bool half,
+                    std::uint32_t* const* out, std::size_t* found) const {
+    if (homes[0].tests < scalar_below) {  // ContactTest's decision: the same contacts, bit for bit
+      const ContactTest<Real, kDiameters> scalar{d, reach_sq, exact, band};
+      const traversal::SortedLayout<Real> layout{{nullptr, nullptr, nullptr, x, y, z, d}, nullptr};
+      for (int b = 0; b < count; ++b) {
+        const std::uint32_t h = homes[b].particle;
+        auto append = [&, next = out[b], test = scalar.for_home(h)](std::uint32_t j, Real dx,
+                                                                    Real dy, Real dz) {
+          next[found[b]] = j;
+          found[b] += test(j, dx, dy, dz);
+        };
+        found[b] = 0;
+        if (half) {
+          traversal::for_each_candidate<true>(layout, nb, h, h, append);
+        } else {
+          traversal::for_each_candidate<false>(layout, nb, h, h, append);
         }
-        return found;
       }
-      task.ranges = ranges;
-      task.count = count;
-      return simd::append_contacts(task, kDiameters, out);
+      return;
     }
-  };
-  ForHome for_home(std::uint32_t h, std::uint64_t candidates) const {
-    return {{x, y, z, d, x[h], y[h], z[h], kDiameters ? d[h] : Real(0), reach_sq, nullptr, 0, h,
-             &exact, band},
-            candidates,
-            scalar_below};
+    std::uint32_t slots[simd::kBlockHomes];
+    for (int b = 0; b < count; ++b) slots[b] = homes[b].particle;
+    const simd::BlockTask<Real> task{x,        y,      z,    d,     reach_sq, nb.ranges.data(),
+                                     nb.count, nb.own, half, slots, count,    out,
+                                     found,    &exact, band};
+    simd::append_contacts(task, kDiameters);
   }
 };
 
@@ -145,9 +151,12 @@ class ContactOp {
  public:
   static constexpr bool kTestsPairs = true;
 
-  ContactOp(const PairTest& test, detail::PartnerBuffer& out, LargeVector<std::uint32_t>& homes,
-            std::uint32_t* found_count)
-      : test_(test), out_(out), homes_(homes), found_count_(found_count) {}
+  ContactOp(const PairTest& test, detail::ThreadOutput& out, std::uint32_t* found_count)
+      : test_(test),
+        out_(out.partners),
+        homes_(out.homes),
+        block_rows_(out.block_rows),
+        found_count_(found_count) {}
 
   struct Sink {
     std::uint32_t* next;
@@ -158,37 +167,56 @@ class ContactOp {
       next[found] = j;
       found += test(j, dx, dy, dz);
     }
-    // Tests that take whole slot ranges (SimdContactTest) are called once per home.
-    void ranges(const SlotRange* r, int count) requires
-        requires(typename PairTest::ForHome t, const SlotRange* q, std::uint32_t* o) {
-      t.append(q, 0, o);
-    }
-    { found += test.append(r, count, next + found); }
   };
   Sink begin_home(const Home& home) {
-    // The slack: the SIMD test stores whole vectors past its last find.
-    return {out_.tail(home.tests + simd::kAppendSlack), 0, for_home(home)};
+    return {out_.tail(home.tests), 0, test_.for_home(home.particle)};
   }
-  void end_home(const Home& home, const Sink& sink) {
-    out_.advance(sink.found);
-    found_count_[home.particle] = static_cast<std::uint32_t>(sink.found);
-    homes_.push_back(home.particle);
-    tests_ += home.tests;
+  void end_home(const Home& home, const Sink& sink) { record(home, sink.found); }
+
+  // Tests that take the homes of a cell together (SimdContactTest) are called once per block.
+  static constexpr int kBlockHomes =
+      requires(const PairTest& t, const Home* h, std::uint32_t* const* o, std::size_t* f) {
+    t.append_block(h, 1, traversal::NeighbourRanges{}, false, o, f);
+  }
+  ? simd::kBlockHomes : 1;
+  // The first home's row is written in place; the others' go to the thread's block rows and
+  // are moved behind it.
+  void visit_block(const Home* homes, int count, const traversal::NeighbourRanges& nb,
+                   bool half) requires(kBlockHomes > 1) {
+    std::uint64_t tests = 0, spilled = 0;
+    for (int b = 0; b < count; ++b) tests += homes[b].tests;
+    std::uint32_t* const row = out_.tail(tests + simd::kAppendSlack);
+    std::array<std::uint32_t*, simd::kBlockHomes> out{row};
+    for (int b = 1; b < count; ++b) spilled += homes[b].tests + simd::kAppendSlack;
+    if (block_rows_.size() < spilled) block_rows_.resize(spilled);
+    std::uint32_t* spill = block_rows_.data();
+    for (int b = 1; b < count; ++b) {
+      out[b] = spill;
+      spill += homes[b].tests + simd::kAppendSlack;
+    }
+    std::array<std::size_t, simd::kBlockHomes> found{};
+    test_.append_block(homes, count, nb, half, out.data(), found.data());
+    std::size_t at = found[0];
+    for (int b = 1; b < count; ++b) {
+      std::memcpy(row + at, out[b], found[b] * sizeof(std::uint32_t));
+      at += found[b];
+    }
+    for (int b = 0; b < count; ++b) record(homes[b], found[b]);
   }
   std::uint64_t tests() const { return tests_; }
 
  private:
-  auto for_home(const Home& home) const {
-    if constexpr (requires { test_.for_home(home.particle, home.tests); }) {
-      return test_.for_home(home.particle, home.tests);
-    } else {
-      return test_.for_home(home.particle);
-    }
+  void record(const Home& home, std::size_t found) {
+    out_.advance(found);
+    found_count_[home.particle] = static_cast<std::uint32_t>(found);
+    homes_.push_back(home.particle);
+    tests_ += home.tests;
   }
 
   PairTest test_;
   detail::PartnerBuffer& out_;
   LargeVector<std::uint32_t>& homes_;
+  LargeVector<std::uint32_t>& block_rows_;
   std::uint32_t* found_count_;
   std::uint64_t tests_ = 0;
 };

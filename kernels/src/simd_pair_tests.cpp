@@ -24,6 +24,7 @@
 #include <bit>
 #include <cstdint>
 #include <type_traits>
+#include <utility>
 
 #ifndef CONTACTLAB_COMPRESS_TABLES  // once per translation unit, not once per target
 #define CONTACTLAB_COMPRESS_TABLES
@@ -64,18 +65,24 @@ alignas(64) inline constexpr auto kCompressBytes = compress_bytes();
 }  // namespace contactlab::simd::detail
 #endif
 
+// The lambdas of the test inlined into its loops (GCC outlined the per-home test of a range's
+// last vector: a call per home and range).
+#ifndef CONTACTLAB_INLINE
+#define CONTACTLAB_INLINE __attribute__((always_inline))
+#endif
+
 HWY_BEFORE_NAMESPACE();
 namespace contactlab::simd {
 namespace HWY_NAMESPACE {
 namespace hn = hwy::HWY_NAMESPACE;
 
-template <bool kDiameters, class Real>
-std::size_t Append(const RangeTask<Real>& task, std::uint32_t* HWY_RESTRICT out) {
+template <int kHomes, bool kDiameters, class Real>
+void AppendBlock(const BlockTask<Real>& task) {
   const hn::ScalableTag<Real> d;
   const hn::Rebind<std::uint32_t, decltype(d)> du;  // a slot per coordinate lane
+  using V = hn::Vec<decltype(d)>;
   const std::size_t lanes = hn::Lanes(d);
-  const auto xi = hn::Set(d, task.xi), yi = hn::Set(d, task.yi), zi = hn::Set(d, task.zi);
-  const auto reach_sq = hn::Set(d, task.reach_sq), di = hn::Set(d, task.di);
+  const auto reach_sq = hn::Set(d, task.reach_sq);
   const auto four = hn::Set(d, Real(4));
   [[maybe_unused]] const auto sure_sq = hn::Set(d, static_cast<Real>(task.band.sure));
   [[maybe_unused]] const auto unsure_sq = hn::Set(d, static_cast<Real>(task.band.unsure));
@@ -89,35 +96,35 @@ std::size_t Append(const RangeTask<Real>& task, std::uint32_t* HWY_RESTRICT out)
   constexpr bool kCompressByTable =
       (HWY_TARGET == HWY_AVX2 || HWY_TARGET == HWY_SSE4 || HWY_TARGET == HWY_SSSE3) &&
       hn::MaxLanes(du) >= 2 && hn::MaxLanes(du) <= 8;
-  // The arrays in locals: through `task`, every store to `out` would reload them (it may alias).
+  // The arrays in locals: through `task`, every store to an output would reload them (it may
+  // alias).
   const Real* HWY_RESTRICT const px = task.x;
   const Real* HWY_RESTRICT const py = task.y;
   const Real* HWY_RESTRICT const pz = task.z;
   [[maybe_unused]] const Real* HWY_RESTRICT const pd = task.d;
-  std::size_t found = 0;
-  // The lanes at slots s.. that `valid` holds: a whole vector (kWhole: every lane, plain loads;
-  // AVX2 keeps a masked load a masked load even under an all-true mask) or a range's last
-  // vector (the lanes before its end).
-  auto test_vector = [&](const std::uint32_t s, const std::uint32_t end, const auto valid,
-                         const auto whole_tag) {
+
+  // A home as the lanes see it: its coordinates broadcast, and where its partners go.
+  struct HomeLanes {
+    V x, y, z, d;
+    std::uint32_t slot;
+    std::uint32_t* HWY_RESTRICT out;
+    std::size_t found;
+  };
+  // One home against a vector of candidates at slots s.. (c*: their coordinates) that `valid`
+  // holds: a whole vector (kWhole) or a range's last one (the lanes before its end).
+  auto test_home = [&](HomeLanes& home, const std::uint32_t s, const std::uint32_t end, V cx, V cy,
+                       V cz, V cd, const auto valid, const auto whole_tag) CONTACTLAB_INLINE {
     constexpr bool kWhole = decltype(whole_tag)::value;
-    auto load = [&](const Real* p) {
-      if constexpr (kWhole) {
-        return hn::LoadU(d, p + s);
-      } else {
-        return hn::MaskedLoad(valid, d, p + s);
-      }
-    };
-    const auto dx = hn::Sub(xi, load(px));
-    const auto dy = hn::Sub(yi, load(py));
-    const auto dz = hn::Sub(zi, load(pz));
+    const auto dx = hn::Sub(home.x, cx);
+    const auto dy = hn::Sub(home.y, cy);
+    const auto dz = hn::Sub(home.z, cz);
     const auto dist_sq = hn::Add(hn::Add(hn::Mul(dx, dx), hn::Mul(dy, dy)), hn::Mul(dz, dz));
     auto hit = hn::Le(dist_sq, reach_sq);
     if constexpr (std::is_same_v<Real, float>) {  // the band of pair_test.hpp's float_contact
       auto maybe = hn::Le(dist_sq, unsure_sq);
       hit = hn::Le(dist_sq, sure_sq);
       if constexpr (kDiameters) {
-        const auto sum = hn::Add(di, load(pd));
+        const auto sum = hn::Add(home.d, cd);
         const auto t = hn::Sub(hn::Mul(sum, sum), hn::Mul(four, dist_sq));
         hit = hn::Ge(t, margin);
         maybe = hn::Ge(t, minus_margin);
@@ -136,31 +143,32 @@ std::size_t Append(const RangeTask<Real>& task, std::uint32_t* HWY_RESTRICT out)
         for (std::uint32_t l = 0; l < count; ++l) {
           bool lane_hit = (hit_bits[l / 8] >> (l % 8)) & 1;
           if ((unsure_bits[l / 8] >> (l % 8)) & 1) {
-            lane_hit = task.exact->in_contact(task.home, s + l, kDiameters);
+            lane_hit = task.exact->in_contact(home.slot, s + l, kDiameters);
           }
-          out[found] = s + l;
-          found += lane_hit;
+          home.out[home.found] = s + l;
+          home.found += lane_hit;
         }
         return;
       }
     } else if constexpr (kDiameters) {
-      const auto sum = hn::Add(di, load(pd));
+      const auto sum = hn::Add(home.d, cd);
       hit = hn::Le(hn::Mul(four, dist_sq), hn::Mul(sum, sum));
     }
     if constexpr (!kWhole) hit = hn::And(hit, valid);
     const auto slots = hn::Add(iota, hn::Set(du, s));
+    std::uint32_t* HWY_RESTRICT const out = home.out + home.found;
     if constexpr (kCompressByTable) {  // at most 8 lanes: the mask is one byte
       std::uint8_t bits[8] = {};
       hn::StoreMaskBits(d, hit, bits);
       if constexpr (hn::MaxLanes(du) == 8) {
         const auto index = hn::LoadU(du, detail::kCompressLanes[bits[0]].data());
-        hn::StoreU(hn::TableLookupLanes(slots, hn::IndicesFromVec(du, index)), du, out + found);
+        hn::StoreU(hn::TableLookupLanes(slots, hn::IndicesFromVec(du, index)), du, out);
       } else {
         const hn::Repartition<std::uint8_t, decltype(du)> du8;
         const auto index = hn::LoadU(du8, detail::kCompressBytes[bits[0]].data());
-        hn::StoreU(hn::TableLookupBytes(slots, hn::BitCast(du, index)), du, out + found);
+        hn::StoreU(hn::TableLookupBytes(slots, hn::BitCast(du, index)), du, out);
       }
-      found += static_cast<std::size_t>(std::popcount(bits[0]));
+      home.found += static_cast<std::size_t>(std::popcount(bits[0]));
       return;
     }
     decltype(hn::FirstN(du, 0)) slot_hit;
@@ -175,35 +183,82 @@ std::size_t Append(const RangeTask<Real>& task, std::uint32_t* HWY_RESTRICT out)
       hn::StoreMaskBits(d, hit, bits);
       slot_hit = hn::LoadMaskBits(du, bits);
     }
-    hn::StoreU(hn::Compress(slots, slot_hit), du, out + found);
-    found += hn::CountTrue(du, slot_hit);
+    hn::StoreU(hn::Compress(slots, slot_hit), du, out);
+    home.found += hn::CountTrue(du, slot_hit);
   };
-  // Whole vectors under a mask fixed outside the loop, then the part-filled last one: no mask
-  // is computed per vector.
+  // The homes [0, kCount) of `homes` against the range [s, end): each vector is loaded once.
+  // Whole vectors under a mask fixed outside the loop, then the part-filled last one: no mask is
+  // computed per vector.
   const auto whole = hn::FirstN(d, lanes);
   const auto step = static_cast<std::uint32_t>(lanes);
-  for (int r = 0; r < task.count; ++r) {
-    const std::uint32_t end = task.ranges[r].end;
-    std::uint32_t s = task.ranges[r].begin;
-    for (; end - s >= step; s += step)
-      test_vector(s, end, whole, std::true_type{});  // begin <= end
-    if (s < end) test_vector(s, end, hn::FirstN(d, end - s), std::false_type{});
+  auto test_range = [&]<int... kHome>(std::integer_sequence<int, kHome...>, HomeLanes * homes,
+                                      std::uint32_t s, const std::uint32_t end) CONTACTLAB_INLINE {
+    auto test_vector = [&](const auto valid, const auto whole_tag) CONTACTLAB_INLINE {
+      constexpr bool kWhole = decltype(whole_tag)::value;
+      auto load = [&](const Real* p) {
+        if constexpr (kWhole) {
+          return hn::LoadU(d, p + s);
+        } else {  // AVX2 keeps a masked load a masked load even under an all-true mask
+          return hn::MaskedLoad(valid, d, p + s);
+        }
+      };
+      const V cx = load(px), cy = load(py), cz = load(pz);
+      V cd = hn::Zero(d);
+      if constexpr (kDiameters) cd = load(pd);
+      (test_home(homes[kHome], s, end, cx, cy, cz, cd, valid, whole_tag), ...);
+    };
+    for (; end - s >= step; s += step) test_vector(whole, std::true_type{});  // s <= end
+    if (s < end) test_vector(hn::FirstN(d, end - s), std::false_type{});
+  };
+  const auto all_homes = std::make_integer_sequence<int, kHomes>{};
+  const auto one_home = std::make_integer_sequence<int, 1>{};
+
+  HomeLanes homes[kHomes];
+  for (int b = 0; b < kHomes; ++b) {
+    const std::uint32_t slot = task.homes[b];
+    homes[b] = {hn::Set(d, px[slot]),
+                hn::Set(d, py[slot]),
+                hn::Set(d, pz[slot]),
+                kDiameters ? hn::Set(d, pd[slot]) : hn::Zero(d),
+                slot,
+                task.out[b],
+                0};
   }
-  return found;
+  for (int r = 0; r < task.count; ++r) {
+    const SlotRange range = task.ranges[r];
+    if (r != task.own) {
+      test_range(all_homes, homes, range.begin, range.end);
+      continue;
+    }
+    // The row of the homes' cell: each home skips its own slot (and with the half stencil the
+    // slots before it), one home at a time.
+    for (HomeLanes& home : homes) {
+      if (!task.half) test_range(one_home, &home, range.begin, home.slot);
+      test_range(one_home, &home, home.slot + 1, range.end);
+    }
+  }
+  for (int b = 0; b < kHomes; ++b) task.found[b] = homes[b].found;
 }
 
-std::size_t AppendDouble(const RangeTask<double>& task, std::uint32_t* out) {
-  return Append<false>(task, out);
+template <bool kDiameters, class Real>
+void AppendHomes(const BlockTask<Real>& task) {
+  switch (task.home_count) {
+    case 1:
+      return AppendBlock<1, kDiameters>(task);
+    case 2:
+      return AppendBlock<2, kDiameters>(task);
+    case 3:
+      return AppendBlock<3, kDiameters>(task);
+    default:
+      static_assert(kBlockHomes == 4);
+      return AppendBlock<4, kDiameters>(task);
+  }
 }
-std::size_t AppendDoubleDiameters(const RangeTask<double>& task, std::uint32_t* out) {
-  return Append<true>(task, out);
-}
-std::size_t AppendFloat(const RangeTask<float>& task, std::uint32_t* out) {
-  return Append<false>(task, out);
-}
-std::size_t AppendFloatDiameters(const RangeTask<float>& task, std::uint32_t* out) {
-  return Append<true>(task, out);
-}
+
+void AppendDouble(const BlockTask<double>& task) { AppendHomes<false>(task); }
+void AppendDoubleDiameters(const BlockTask<double>& task) { AppendHomes<true>(task); }
+void AppendFloat(const BlockTask<float>& task) { AppendHomes<false>(task); }
+void AppendFloatDiameters(const BlockTask<float>& task) { AppendHomes<true>(task); }
 std::int64_t Target() { return HWY_TARGET; }
 
 }  // namespace HWY_NAMESPACE
@@ -229,13 +284,13 @@ HWY_EXPORT(AppendFloat);
 HWY_EXPORT(AppendFloatDiameters);
 HWY_EXPORT(Target);
 
-std::size_t append_contacts(const RangeTask<double>& task, bool diameters, std::uint32_t* out) {
-  return diameters ? HWY_DYNAMIC_DISPATCH(AppendDoubleDiameters)(task, out)
-                   : HWY_DYNAMIC_DISPATCH(AppendDouble)(task, out);
+void append_contacts(const BlockTask<double>& task, bool diameters) {
+  return diameters ? HWY_DYNAMIC_DISPATCH(AppendDoubleDiameters)(task)
+                   : HWY_DYNAMIC_DISPATCH(AppendDouble)(task);
 }
-std::size_t append_contacts(const RangeTask<float>& task, bool diameters, std::uint32_t* out) {
-  return diameters ? HWY_DYNAMIC_DISPATCH(AppendFloatDiameters)(task, out)
-                   : HWY_DYNAMIC_DISPATCH(AppendFloat)(task, out);
+void append_contacts(const BlockTask<float>& task, bool diameters) {
+  return diameters ? HWY_DYNAMIC_DISPATCH(AppendFloatDiameters)(task)
+                   : HWY_DYNAMIC_DISPATCH(AppendFloat)(task);
 }
 
 namespace {
@@ -341,10 +396,10 @@ bool simd_forced() {
 
 namespace contactlab {
 namespace simd {
-std::size_t append_contacts(const RangeTask<double>&, bool, std::uint32_t*) {
+void append_contacts(const BlockTask<double>&, bool) {
   throw InputError("this build has no SIMD contact tests");
 }
-std::size_t append_contacts(const RangeTask<float>&, bool, std::uint32_t*) {
+void append_contacts(const BlockTask<float>&, bool) {
   throw InputError("this build has no SIMD contact tests");
 }
 }  // namespace simd

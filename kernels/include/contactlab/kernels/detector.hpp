@@ -70,7 +70,8 @@ class PartnerBuffer {
 // tenth of a first run at 2 threads where a page fault costs about 10 us).
 struct alignas(64) ThreadOutput {
   PartnerBuffer partners;
-  LargeVector<std::uint32_t> homes;  // in visiting order
+  LargeVector<std::uint32_t> homes;       // in visiting order
+  LargeVector<std::uint32_t> block_rows;  // rows of a block's later homes, before they move
 };
 
 }  // namespace detail

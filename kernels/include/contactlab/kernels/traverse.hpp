@@ -8,9 +8,9 @@
 //   sink(j, dx, dy, dz);               // per candidate j, dx = x_home - x_j (if Op::kTestsPairs)
 //   op.end_home(home, sink);
 //
-// or, where the sink has ranges(ranges, count) (the SIMD contact test of the sorted layouts,
-// whose slots are working ids), one call per home with its candidates as slot ranges, in the
-// same order.
+// or, where the op has visit_block (the SIMD contact test of the sorted layouts, whose slots are
+// working ids), one call per block of up to Op::kBlockHomes homes of one cell, in visiting
+// order, with the cell's stencil as slot ranges: op.visit_block(homes, count, ranges, half).
 //
 // The sink is a value local to the loop, so the per-candidate state of an op (the next free
 // place of a branchless append, a count) stays in registers. Ops with kTestsPairs = false see
@@ -180,42 +180,36 @@ struct Home {
 template <bool kHalf, class Layout, class Sink>
 inline void for_each_candidate(const Layout& layout, const NeighbourRanges& nb, std::uint32_t h,
                                std::uint32_t s_h, Sink& sink) {
-  if constexpr (requires(const SlotRange* r) { sink.ranges(r, 0); }) {
-    std::array<SlotRange, 28> ranges;  // the own range may be split around the home
-    int count = 0;
-    for (int r = 0; r < nb.count; ++r) {
-      const SlotRange range = nb.ranges[r];
-      if (r != nb.own) {
-        ranges[count++] = range;
-      } else if constexpr (kHalf) {
-        ranges[count++] = {s_h + 1, range.end};
-      } else {
-        ranges[count++] = {range.begin, s_h};
-        ranges[count++] = {s_h + 1, range.end};
-      }
+  using Real = typename Layout::Real;
+  const Real xi = layout.x[h], yi = layout.y[h], zi = layout.z[h];
+  auto visit_range = [&](std::uint32_t begin, std::uint32_t end) {
+    for (std::uint32_t s = begin; s < end; ++s) {
+      const std::uint32_t j = layout.particle_at(s);
+      sink(j, xi - layout.x[j], yi - layout.y[j], zi - layout.z[j]);
     }
-    sink.ranges(ranges.data(), count);
+  };
+  for (int r = 0; r < nb.count; ++r) {
+    const SlotRange range = nb.ranges[r];
+    if (r != nb.own) {
+      visit_range(range.begin, range.end);
+    } else if constexpr (kHalf) {
+      // The range starts at the home cell: only its later slots and the cells after it.
+      visit_range(s_h + 1, range.end);
+    } else {
+      visit_range(range.begin, s_h);
+      visit_range(s_h + 1, range.end);
+    }
+  }
+}
+
+// How many homes of one cell an op takes at once: Op::kBlockHomes where it has
+// visit_block(homes, count, ranges, half), else 1 (begin_home / end_home per home).
+template <class Op>
+constexpr int block_homes() {
+  if constexpr (requires { Op::kBlockHomes; }) {
+    return Op::kBlockHomes;
   } else {
-    using Real = typename Layout::Real;
-    const Real xi = layout.x[h], yi = layout.y[h], zi = layout.z[h];
-    auto visit_range = [&](std::uint32_t begin, std::uint32_t end) {
-      for (std::uint32_t s = begin; s < end; ++s) {
-        const std::uint32_t j = layout.particle_at(s);
-        sink(j, xi - layout.x[j], yi - layout.y[j], zi - layout.z[j]);
-      }
-    };
-    for (int r = 0; r < nb.count; ++r) {
-      const SlotRange range = nb.ranges[r];
-      if (r != nb.own) {
-        visit_range(range.begin, range.end);
-      } else if constexpr (kHalf) {
-        // The range starts at the home cell: only its later slots and the cells after it.
-        visit_range(s_h + 1, range.end);
-      } else {
-        visit_range(range.begin, s_h);
-        visit_range(s_h + 1, range.end);
-      }
-    }
+    return 1;
   }
 }
 
@@ -226,11 +220,27 @@ void traverse_with(const Spec& spec, const Index& index, const Layout& layout, O
   const StencilRows stencil = make_stencil(spec.stencil);
   const bool all_owned = spec.homes.covers(n);
   NeighbourRanges nb;
+  // Homes of one cell waiting to be visited together (ops with kBlockHomes > 1): they share the
+  // ranges in `nb`, so the block is visited before `nb` is built for another cell.
+  constexpr int kBlock = block_homes<Op>();
+  std::array<Home, kBlock> block;
+  int waiting = 0;
+  auto flush = [&] {
+    if constexpr (kBlock > 1) {
+      if (waiting > 0) op.visit_block(block.data(), waiting, nb, kHalf);
+      waiting = 0;
+    }
+  };
   auto visit = [&](std::uint32_t h, std::uint32_t s_h, std::uint64_t iteration, bool built) {
     const Home home{h, s_h, iteration, nb.tests_from(s_h, kHalf), built};
-    auto sink = op.begin_home(home);
-    if constexpr (Op::kTestsPairs) for_each_candidate<kHalf>(layout, nb, h, s_h, sink);
-    op.end_home(home, sink);
+    if constexpr (kBlock > 1) {
+      if (waiting == kBlock) flush();
+      block[waiting++] = home;
+    } else {
+      auto sink = op.begin_home(home);
+      if constexpr (Op::kTestsPairs) for_each_candidate<kHalf>(layout, nb, h, s_h, sink);
+      op.end_home(home, sink);
+    }
   };
   // The loop iteration -> particle (or cell) map is chosen outside the loop, so the
   // single-process loop carries no block arithmetic (most cell-loop iterations are empty).
@@ -253,6 +263,7 @@ void traverse_with(const Spec& spec, const Index& index, const Layout& layout, O
           const std::uint64_t key = index.key(grid, home[0], home[1], home[2]);
           built = key != cached_key;
           if (built) {
+            flush();
             nb.build(grid, index, stencil, home);
             cached_key = key;
             cached_cell = index.cell_slots(key);
@@ -260,6 +271,7 @@ void traverse_with(const Spec& spec, const Index& index, const Layout& layout, O
         }
         visit(h, s_h, h, built);
       }
+      flush();
     } else {
       // One iteration per cell key (dense index) or per occupied cell (hashed index).
       const std::uint64_t iterations = spec.blocks.size(index.cell_iterations());
@@ -269,6 +281,7 @@ void traverse_with(const Spec& spec, const Index& index, const Layout& layout, O
         const SlotRange slots = index.iteration_slots(cell);
         if (slots.begin == slots.end) continue;
         const std::uint32_t first = layout.particle_at(slots.begin);
+        flush();
         nb.build(grid, index, stencil,
                  grid.coords_of(layout.cell_x[first], layout.cell_y[first], layout.cell_z[first]));
         bool built = true;  // reported with the cell's first home
@@ -279,6 +292,7 @@ void traverse_with(const Spec& spec, const Index& index, const Layout& layout, O
           built = false;
         }
       }
+      flush();
     }
   };
   if (spec.blocks.all()) {
