@@ -56,10 +56,11 @@ struct ContactTest {
 };
 
 // Below this many candidates a home (or, estimated from the cell occupancy, the average home
-// of a scene) is tested in the scalar loop: a dispatched call and a masked vector per
-// near-empty range cost more than 3-4 tests (the uniform scene at D = 1/200 ran 10-17 %
-// slower at one thread on SIMD lanes).
-inline constexpr std::uint64_t kSimdFrom = 16;
+// of a scene) is tested in the scalar loop. With the homes of a cell in blocks, a vector call is
+// shared by up to four: 4 (was 16 with one home a call) ran the paper scene's full stencil 3 %
+// faster and its float variant 8 %; 0 (every home on lanes) ran the uniform scene's cell loop
+// (about 3.5 candidates a home) 16 % slower (docs/architecture.md).
+inline constexpr std::uint64_t kSimdFrom = 4;
 
 // The contact test of pair_test.hpp for the homes of one cell at once, against their stencil's
 // slot ranges, on SIMD lanes (simd_pair_tests.hpp): sorted layouts only, where slots are working
@@ -84,17 +85,19 @@ struct SimdContactTest {
       const traversal::SortedLayout<Real> layout{{nullptr, nullptr, nullptr, x, y, z, d}, nullptr};
       for (int b = 0; b < count; ++b) {
         const std::uint32_t h = homes[b].particle;
-        auto append = [&, next = out[b], test = scalar.for_home(h)](std::uint32_t j, Real dx,
-                                                                    Real dy, Real dz) {
-          next[found[b]] = j;
-          found[b] += test(j, dx, dy, dz);
+        // The count in a local: through found[b], each append waited for the last one's store.
+        std::size_t hits = 0;
+        auto append = [&hits, next = out[b], test = scalar.for_home(h)](std::uint32_t j, Real dx,
+                                                                        Real dy, Real dz) {
+          next[hits] = j;
+          hits += test(j, dx, dy, dz);
         };
-        found[b] = 0;
         if (half) {
           traversal::for_each_candidate<true>(layout, nb, h, h, append);
         } else {
           traversal::for_each_candidate<false>(layout, nb, h, h, append);
         }
+        found[b] = hits;
       }
       return;
     }

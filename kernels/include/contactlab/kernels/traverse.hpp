@@ -38,12 +38,26 @@ namespace contactlab::traversal {
 // range found with two loads. Rows are in ascending key order (z, then y).
 struct StencilRow {
   int dy, dz, dx_lo, dx_hi;
+  // Linear numbering: the row's first and last keys less the home cell's (see with_key_steps).
+  std::int64_t first_key = 0, last_key = 0;
 };
 
 struct StencilRows {
   std::array<StencilRow, 9> rows{};
   int count = 0;
   int own = 0;  // the row holding the home cell
+
+  // The rows' keys relative to the home cell's in a linear numbering of `dims` cells: a home
+  // away from the grid's faces finds its rows by addition alone.
+  StencilRows& with_key_steps(const std::array<int, 3>& dims) {
+    const std::int64_t y_step = dims[0], z_step = std::int64_t{dims[0]} * dims[1];
+    for (StencilRow& row : rows) {
+      const std::int64_t start = row.dz * z_step + row.dy * y_step;
+      row.first_key = start + row.dx_lo;
+      row.last_key = start + row.dx_hi;
+    }
+    return *this;
+  }
 };
 
 inline StencilRows make_stencil(Stencil stencil) {
@@ -86,6 +100,24 @@ struct NeighbourRanges {
     candidates = 0;
     const auto& dims = grid.dims();
     const bool linear = grid.numbering() == CellNumbering::kLinear;
+    if (linear && home[0] > 0 && home[1] > 0 && home[2] > 0 && home[0] + 1 < dims[0] &&
+        home[1] + 1 < dims[1] && home[2] + 1 < dims[2]) {
+      // Away from the faces every row is in the grid: its keys by addition, no bounds (the
+      // multiplications and clamps of the general case below were half of a sparse home's
+      // range build).
+      const auto centre = static_cast<std::int64_t>(index.key(grid, home[0], home[1], home[2]));
+      for (int r = 0; r < stencil.count; ++r) {
+        const StencilRow& row = stencil.rows[r];
+        const SlotRange range =
+            index.key_range(r, static_cast<std::uint64_t>(centre + row.first_key),
+                            static_cast<std::uint64_t>(centre + row.last_key));
+        own = r == stencil.own ? count : own;
+        ranges[count] = range;  // kept only if it holds a particle, as below
+        count += range.begin != range.end;
+        candidates += range.end - range.begin;
+      }
+      return;
+    }
     std::array<std::uint64_t, 3> x_part{};  // Morton: the x parts of the home's x - 1 .. x + 1
     if (!linear) {
       for (int i = 0; i < 3; ++i) x_part[i] = Index::morton_part(0, home[0] - 1 + i);
@@ -217,7 +249,7 @@ template <bool kHalf, class Index, class Layout, class Op>
 void traverse_with(const Spec& spec, const Index& index, const Layout& layout, Op& op) {
   const CellGrid& grid = spec.grid;
   const std::uint32_t n = static_cast<std::uint32_t>(spec.registry.slot_particle.size());
-  const StencilRows stencil = make_stencil(spec.stencil);
+  const StencilRows stencil = make_stencil(spec.stencil).with_key_steps(grid.dims());
   const bool all_owned = spec.homes.covers(n);
   NeighbourRanges nb;
   // Homes of one cell waiting to be visited together (ops with kBlockHomes > 1): they share the
