@@ -205,7 +205,9 @@ void CellRegistry::sort_and_index(const CellGrid& grid, const Scene& scene, std:
                                   LargeVector<Entry>& scratch) {
   const std::size_t n = scene.size();
   const std::uint64_t keys = grid.key_count();
-  constexpr int kDigitBits = 12;
+  // 8-bit digits: three passes over a 199^3 grid's 23-bit keys ran 6 % faster than two passes
+  // of 12 bits, whose 4096 scatter streams (one line each) outgrow L1 and the TLB.
+  constexpr int kDigitBits = 8;
   constexpr std::size_t kBuckets = std::size_t{1} << kDigitBits;
   const int passes = (key_bits + kDigitBits - 1) / kDigitBits;
   const bool wide_keys = hashed;  // 64-bit keys (any grid); the dense table's are 32-bit
@@ -225,18 +227,22 @@ void CellRegistry::sort_and_index(const CellGrid& grid, const Scene& scene, std:
     const auto t = static_cast<std::size_t>(omp_get_thread_num());
     const std::size_t size = static_cast<std::size_t>(omp_get_num_threads());
     const std::size_t b = n * t / size, e = n * (t + 1) / size;
-    for (std::size_t i = b; i < e; ++i) {
+    std::uint64_t* mine = histograms_.data() + t * kBuckets;
+    std::fill(mine, mine + kBuckets, 0);
+    for (std::size_t i = b; i < e; ++i) {  // the keys, and the first pass's histogram
       const auto c = grid.coords_of(scene.x[i], scene.y[i], scene.z[i]);
       from[i] =
           Entry::make(wide_keys ? grid.wide_key(c[0], c[1], c[2]) : grid.key(c[0], c[1], c[2]), i);
+      ++mine[from[i].key() & (kBuckets - 1)];
     }
-    std::uint64_t* mine = histograms_.data() + t * kBuckets;
     Entry* in = from;
     Entry* out = to;
     for (int pass = 0; pass < passes; ++pass) {
       const int shift = pass * kDigitBits;
-      std::fill(mine, mine + kBuckets, 0);
-      for (std::size_t i = b; i < e; ++i) ++mine[(in[i].key() >> shift) & (kBuckets - 1)];
+      if (pass > 0) {
+        std::fill(mine, mine + kBuckets, 0);
+        for (std::size_t i = b; i < e; ++i) ++mine[(in[i].key() >> shift) & (kBuckets - 1)];
+      }
 #pragma omp barrier
 #pragma omp single
       {  // offsets: bucket by bucket, within a bucket thread by thread
