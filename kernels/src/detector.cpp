@@ -182,7 +182,7 @@ void ContactDetector::detect(const CellGrid& grid, const Layout& layout, const P
     run.thread_busy_s[tid] = omp_get_wtime() - loop_start;
     thread_tests[tid] = op.tests();
     if (options.observer) options.observer->thread_end(tid);
-    assemble_rows(tid, threads, half);
+    assemble_rows(tid, threads, half, rows_in_place);
   }
   run.detect_s = omp_get_wtime() - start;
   if (options.observer) options.observer->region_end();
@@ -194,7 +194,7 @@ void ContactDetector::detect(const CellGrid& grid, const Layout& layout, const P
 // Called by every thread of the detection region after its traversal. Row h = h's own finds,
 // then (half stencil) every find (g, h) made from another particle g, grouped by the thread
 // that made it.
-void ContactDetector::assemble_rows(int tid, int threads, bool half) {
+void ContactDetector::assemble_rows(int tid, int threads, bool half, bool rows_in_blocks) {
   const std::uint32_t n = static_cast<std::uint32_t>(found_count_.size());
   const detail::PartnerBuffer& out = thread_out_[tid].partners;
   std::uint32_t* const reverse = half ? reverse_count_.data() + std::size_t{n} * tid : nullptr;
@@ -237,6 +237,10 @@ void ContactDetector::assemble_rows(int tid, int threads, bool half) {
     offsets[0] = 0;
     contacts_.partners.resize(offsets[n]);
   }
+  if (rows_in_blocks) {
+    copy_row_blocks(tid, threads);
+    return;
+  }
   // A buffer still borrowing the contact list's storage holds its rows in place (resize keeps
   // them, copying them along if it has to grow).
   if (out.borrowing()) return;
@@ -263,6 +267,35 @@ void ContactDetector::assemble_rows(int tid, int threads, bool half) {
       const std::uint32_t j = finds[at];
       partners[offsets[j] + reverse[j]++] = h;
     }
+  }
+}
+
+// Where each thread's homes are consecutive rows (the full stencil under a static schedule
+// without a chunk size: see writes_first_rows_in_place), each thread's buffer is one block of
+// the output, starting at its first home's row. The blocks not written in place are copied by
+// every thread, an equal slice each: thread 0 writes in place and had nothing to copy, so
+// copying one's own rows left it idle while the others copied (at two threads, a quarter of the
+// output's time on one thread alone).
+void ContactDetector::copy_row_blocks(int tid, int threads) {
+  std::uint64_t total = 0;
+  for (int u = 0; u < threads; ++u) {
+    if (!thread_out_[u].partners.borrowing()) total += thread_out_[u].partners.size();
+  }
+  const std::uint64_t mine_first = total * tid / threads, mine_last = total * (tid + 1) / threads;
+  std::uint64_t block_first = 0;  // of block u, in the concatenation of the copied blocks
+  for (int u = 0; u < threads && block_first < mine_last; ++u) {
+    const detail::ThreadOutput& block = thread_out_[u];
+    if (block.partners.borrowing() || block.partners.size() == 0) continue;
+    const std::uint64_t block_last = block_first + block.partners.size();
+    const std::uint64_t first = std::max(block_first, mine_first);
+    const std::uint64_t last = std::min(block_last, mine_last);
+    if (first < last) {
+      const std::uint64_t row_start = contacts_.offsets[block.homes.front()];
+      std::memcpy(contacts_.partners.data() + row_start + (first - block_first),
+                  block.partners.data() + (first - block_first),
+                  (last - first) * sizeof(std::uint32_t));
+    }
+    block_first = block_last;
   }
 }
 

@@ -306,6 +306,10 @@ TEST(Detector, RowsWrittenInPlaceMatchTheBruteForce) {
       {3000, 0.1, "particle/sorted/half/static", 2},
       {200, 0.1, "particle/sorted/full/dynamic,3", 1},  // fewer rows than last time
       {3000, 0.12, "particle/sorted/full/static/float", 1},
+      // More rows than kept, at three threads: thread 0's block leaves the storage and is
+      // copied with the others', every thread a slice.
+      {6000, 0.1, "particle/sorted/full/static", 3},
+      {6000, 0.1, "cell/sorted/full/static", 2},
   };
   ContactDetector detector;
   for (std::size_t k = 0; k < steps.size(); ++k) {

@@ -224,7 +224,8 @@ class ContactDetector {
   template <class Layout, class PairTest>
   void detect(const CellGrid& grid, const Layout& layout, const PairTest& test,
               const DetectOptions& options, DetectRun& run);
-  void assemble_rows(int thread, int threads, bool half);
+  void assemble_rows(int thread, int threads, bool half, bool rows_in_blocks);
+  void copy_row_blocks(int thread, int threads);
 
   std::vector<std::uint64_t> range_sums_;  // assemble_rows: each thread's rows, summed
   CellRegistry registry_;
