@@ -1,5 +1,5 @@
 // The pair ops of the detector's traversals (private to kernels/src): the contact test per
-// candidate (ContactTest) or per home's slot ranges on SIMD lanes (SimdContactTest), the
+// candidate (ContactTest) or per block of a cell's homes on SIMD lanes (SimdContactTest), the
 // neighbour-list test (NeighborTest), the op that appends partners (ContactOp) and the op that
 // only counts work (WorkCountOp). See traverse.hpp for the op protocol.
 #pragma once

@@ -12,6 +12,7 @@
 #include "contactlab/tuner/tuning_method.hpp"
 #include "contactlab/tuner_model/chunk_formulas.hpp"
 #include "contactlab/tuner_model/emulation.hpp"
+#include "contactlab/tuner_model/output_cost.hpp"
 
 namespace contactlab::tuner {
 
@@ -107,6 +108,7 @@ ThreadEmulation emulate_threads(const Scene& scene, double diameter,
 
   ThreadEmulation result;
   result.calibration = calibration;
+  const OutputEstimate output = kernel.estimated_output();
   std::deque<LoopWork> works;  // kept alive: PreparedWork holds views
   std::deque<PreparedWork> prepared;
   for (std::size_t i = 0; i < options.variants.size(); ++i) {
@@ -131,17 +133,37 @@ ThreadEmulation emulate_threads(const Scene& scene, double diameter,
     const auto found = result.calibration.structures.find(structure_key(variant));
     const MachineCosts costs =
         found != result.calibration.structures.end() ? found->second.costs : MachineCosts{};
-    const AnchoredLoop loop(prepared.back(), costs, variant.schedule, one.detect_s.median);
+    // The rows copied after the loop (output_cost.hpp): the calibrated cost per entry times
+    // the share of the entries the schedule leaves to copy at t threads. The full stencil at
+    // one thread writes its rows in place and copies none, but under a chunked schedule at two
+    // or more threads it copies them all: the one-thread anchor holds no copy to scale.
+    const std::vector<OutputCost> none;
+    const std::vector<OutputCost>& output_costs =
+        found != result.calibration.structures.end() ? found->second.output : none;
+    auto output_s = [&](int threads, const Schedule& schedule) {
+      return output_seconds(output_costs, output, threads) *
+             kernel.copied_output_share(with_schedule(variant, schedule.kind, schedule.chunk),
+                                        threads);
+    };
+    auto detect_s = [&](const AnchoredLoop& anchored, int threads, const Schedule& schedule) {
+      return anchored.seconds(threads, schedule) + output_s(threads, schedule);
+    };
+    // The loop alone is anchored: the measured one-thread T_c less its copy.
+    const double loop_one =
+        std::max(one.detect_s.median - output_s(1, variant.schedule), 0.05 * one.detect_s.median);
+    const AnchoredLoop loop(prepared.back(), costs, variant.schedule, loop_one);
     e.anchor_scale = loop.scale();
     for (const int t : options.threads) {
       const ScheduleOutcome outcome = loop.replay(t, variant.schedule);
-      e.emulated.push_back({t, setup.at(t), outcome.makespan_seconds, 0.0, outcome.imbalance});
+      const double copy = output_s(t, variant.schedule);
+      e.emulated.push_back(
+          {t, setup.at(t), outcome.makespan_seconds + copy, 0.0, outcome.imbalance, copy});
     }
-    const double one_thread_total = setup.at(1) + loop.seconds(1, variant.schedule);
+    const double one_thread_total = setup.at(1) + detect_s(loop, 1, variant.schedule);
     for (EmulatedThreads& point : e.emulated) point.speedup = one_thread_total / point.total_s();
     for (const MeasuredThreads& m : e.measured) {
       if (m.threads == 1) continue;
-      const double detect = loop.seconds(m.threads, variant.schedule);
+      const double detect = detect_s(loop, m.threads, variant.schedule);
       e.checks.push_back(
           {m.threads, m.total_s.median, setup.at(m.threads) + detect, m.detect_s.median, detect});
     }
@@ -154,15 +176,15 @@ ThreadEmulation emulate_threads(const Scene& scene, double diameter,
           EmulatedChunkStudy study;
           study.threads = t;
           study.variant = with_schedule(variant, kind, 1);
-          study.block_detect_s = loop.seconds(t, {ScheduleKind::kStatic, 0});
+          study.block_detect_s = detect_s(loop, t, {ScheduleKind::kStatic, 0});
           if (kind == ScheduleKind::kDynamic) {
             for (const NamedChunk& c : classic_chunks(prepared.back().view(), t, costs)) {
               study.classic.push_back(
-                  {c.name, c.chunk, loop.seconds(t, {ScheduleKind::kDynamic, c.chunk})});
+                  {c.name, c.chunk, detect_s(loop, t, {ScheduleKind::kDynamic, c.chunk})});
             }
           }
           for (const int chunk : options.chunk_grid) {
-            const double s = loop.seconds(t, {kind, chunk});
+            const double s = detect_s(loop, t, {kind, chunk});
             study.detect_s.emplace_back(chunk, s);
             if (study.best_chunk == 0 || s < study.best_detect_s) {
               study.best_chunk = chunk;
@@ -192,8 +214,10 @@ nlohmann::json emulation_document(const ThreadEmulation& emulation,
       "order-statistic intervals). Emulated: the detection loop's exact work per iteration "
       "priced by machine costs calibrated on small calibration scenes (not this one) at up to "
       "{} threads, scaled so that the one-thread replay equals this scene's measured one-thread "
-      "T_c, then replayed under the variant's schedule as libgomp deals it (static, static,k, "
-      "dynamic,k, guided,k); T_s = serial + parallel/P fitted from the measured 1- and "
+      "T_c less its output copy, then replayed under the variant's schedule as libgomp deals it "
+      "(static, static,k, dynamic,k, guided,k), plus the rows the schedule leaves to copy after "
+      "the loop at P threads (the calibrated cost per output entry); T_s = serial + "
+      "parallel/P fitted from the measured 1- and "
       "{}-thread T_s. Not modelled: memory bandwidth and shared caches as threads are added, "
       "and caches that the split work comes to fit (superlinear speed-up): beyond this "
       "machine's cores an emulated speed-up is what the schedule's balance allows.",
@@ -226,7 +250,8 @@ nlohmann::json emulation_document(const ThreadEmulation& emulation,
                                {"detect_s", p.detect_s},
                                {"total_s", p.total_s()},
                                {"speedup", p.speedup},
-                               {"imbalance", p.imbalance}});
+                               {"imbalance", p.imbalance},
+                               {"output_s", p.output_s}});
     }
     v["validation"] = nlohmann::json::array();
     for (const EmulationCheck& c : e.checks) {

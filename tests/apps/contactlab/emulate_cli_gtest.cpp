@@ -48,6 +48,15 @@ TEST(EmulateCli, ThreadsWritesMeasuredEmulatedChecksAndChunks) {
                 v["measured"][0]["detect_s"]["median"].get<double>(), 1e-12);
     EXPECT_DOUBLE_EQ(v["emulated"][0]["speedup"].get<double>(), 1.0);
     EXPECT_EQ(v["emulated"][3]["threads"], 16);
+    // The full stencil at one thread writes its rows in place: no copy in the anchor. At more
+    // threads (static) the other threads' rows are copied, a share of the output that shrinks
+    // per thread as the threads grow.
+    EXPECT_EQ(v["emulated"][0]["output_s"].get<double>(), 0.0);
+    EXPECT_GT(v["emulated"][1]["output_s"].get<double>(), 0.0);
+    EXPECT_LT(v["emulated"][1]["output_s"].get<double>(),
+              v["emulated"][1]["detect_s"].get<double>());
+    EXPECT_LT(v["emulated"][3]["output_s"].get<double>(),
+              v["emulated"][1]["output_s"].get<double>());
     ASSERT_EQ(v["validation"].size(), 1u);
     const auto& c = v["validation"][0];
     EXPECT_EQ(c["threads"], 2);

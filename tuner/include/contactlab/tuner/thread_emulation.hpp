@@ -34,6 +34,7 @@ struct MeasuredThreads {
 struct EmulatedThreads {
   int threads = 1;
   double setup_s = 0.0, detect_s = 0.0, speedup = 0.0, imbalance = 0.0;
+  double output_s = 0.0;  // of detect_s: the rows copied after the loop
   double total_s() const { return setup_s + detect_s; }
 };
 
