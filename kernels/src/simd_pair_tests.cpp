@@ -186,7 +186,8 @@ void AppendBlock(const BlockTask<Real>& task) {
     hn::StoreU(hn::Compress(slots, slot_hit), du, out);
     home.found += hn::CountTrue(du, slot_hit);
   };
-  // The homes [0, kCount) of `homes` against the range [s, end): each vector is loaded once.
+  // The homes of `homes` at the indices kHome... against the range [s, end): each vector is
+  // loaded once for all of them.
   // Whole vectors under a mask fixed outside the loop, then the part-filled last one: no mask is
   // computed per vector.
   const auto whole = hn::FirstN(d, lanes);
