@@ -128,6 +128,31 @@ void OccupiedCells::build_table(int threads) {
   }
 }
 
+void CellGrid::keys_of(const double* x, const double* y, const double* z, std::size_t count,
+                       std::uint64_t* keys) const {
+  if (numbering_ == CellNumbering::kMorton) {
+    for (std::size_t i = 0; i < count; ++i) {
+      const auto c = coords_of(x[i], y[i], z[i]);
+      keys[i] = wide_key(c[0], c[1], c[2]);
+    }
+    return;
+  }
+  // axis_coord() with its members in locals: through `this`, each store to keys could alias
+  // them, and the loop would not be vectorised.
+  const double lx = lo_[0], ly = lo_[1], lz = lo_[2];
+  const double ix = inverse_width_[0], iy = inverse_width_[1], iz = inverse_width_[2];
+  const int mx = dims_[0] - 1, my = dims_[1] - 1, mz = dims_[2] - 1;
+  const std::uint64_t row = static_cast<std::uint64_t>(dims_[0]);
+  const std::uint64_t layer = row * static_cast<std::uint64_t>(dims_[1]);
+  for (std::size_t i = 0; i < count; ++i) {
+    const int cx = std::min(static_cast<int>((x[i] - lx) * ix), mx);
+    const int cy = std::min(static_cast<int>((y[i] - ly) * iy), my);
+    const int cz = std::min(static_cast<int>((z[i] - lz) * iz), mz);
+    keys[i] = static_cast<std::uint64_t>(cz) * layer + static_cast<std::uint64_t>(cy) * row +
+              static_cast<std::uint64_t>(cx);
+  }
+}
+
 std::size_t CellRegistry::index_bytes() const {
   return hashed ? occupied.bytes() : cell_begin.capacity() * sizeof(std::uint32_t);
 }
@@ -210,7 +235,6 @@ void CellRegistry::sort_and_index(const CellGrid& grid, const Scene& scene, std:
   constexpr int kDigitBits = 8;
   constexpr std::size_t kBuckets = std::size_t{1} << kDigitBits;
   const int passes = (key_bits + kDigitBits - 1) / kDigitBits;
-  const bool wide_keys = hashed;  // 64-bit keys (any grid); the dense table's are 32-bit
 
   buffer.resize(n);
   scratch.resize(n);
@@ -229,11 +253,18 @@ void CellRegistry::sort_and_index(const CellGrid& grid, const Scene& scene, std:
     const std::size_t b = n * t / size, e = n * (t + 1) / size;
     std::uint64_t* mine = histograms_.data() + t * kBuckets;
     std::fill(mine, mine + kBuckets, 0);
-    for (std::size_t i = b; i < e; ++i) {  // the keys, and the first pass's histogram
-      const auto c = grid.coords_of(scene.x[i], scene.y[i], scene.z[i]);
-      from[i] =
-          Entry::make(wide_keys ? grid.wide_key(c[0], c[1], c[2]) : grid.key(c[0], c[1], c[2]), i);
-      ++mine[from[i].key() & (kBuckets - 1)];
+    // The keys, a block at a time on SIMD lanes, and with them the first pass's histogram. A
+    // dense grid's wide keys are its keys.
+    constexpr std::size_t kKeyBlock = 256;
+    std::uint64_t block_keys[kKeyBlock];
+    for (std::size_t first = b; first < e; first += kKeyBlock) {
+      const std::size_t count = std::min(kKeyBlock, e - first);
+      grid.keys_of(scene.x.data() + first, scene.y.data() + first, scene.z.data() + first, count,
+                   block_keys);
+      for (std::size_t k = 0; k < count; ++k) {
+        from[first + k] = Entry::make(block_keys[k], first + k);
+        ++mine[block_keys[k] & (kBuckets - 1)];
+      }
     }
     Entry* in = from;
     Entry* out = to;

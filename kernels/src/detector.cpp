@@ -173,12 +173,12 @@ void ContactDetector::detect(const CellGrid& grid, const Layout& layout, const P
     } else {
       mine.partners.stop_borrowing();
     }
-    mine.homes.clear();
-    mine.homes.reserve(n);
+    mine.homes.resize(n);  // room for every home; cut to those visited after the loop
     ContactOp<PairTest> op(test, mine, found_count_.data());
     if (options.observer) options.observer->thread_begin(tid);
     const double loop_start = omp_get_wtime();
     traversal::traverse(spec, layout, op);
+    mine.homes.resize(op.homes_visited());
     run.thread_busy_s[tid] = omp_get_wtime() - loop_start;
     thread_tests[tid] = op.tests();
     if (options.observer) options.observer->thread_end(tid);

@@ -107,8 +107,10 @@ void AppendBlock(const BlockTask<Real>& task) {
   struct HomeLanes {
     V x, y, z, d;
     std::uint32_t slot;
+    // The next partner's place. A cursor, not a base and a count: four homes' bases and counts,
+    // the slots and the arrays outnumbered the general registers, and the counts, kept on the
+    // stack, made every vector wait for a store and a reload.
     std::uint32_t* HWY_RESTRICT out;
-    std::size_t found;
   };
   // One home against a vector of candidates at slots s.. (c*: their coordinates) that `valid`
   // holds: a whole vector (kWhole) or a range's last one (the lanes before its end).
@@ -145,8 +147,8 @@ void AppendBlock(const BlockTask<Real>& task) {
           if ((unsure_bits[l / 8] >> (l % 8)) & 1) {
             lane_hit = task.exact->in_contact(home.slot, s + l, kDiameters);
           }
-          home.out[home.found] = s + l;
-          home.found += lane_hit;
+          *home.out = s + l;
+          home.out += lane_hit;
         }
         return;
       }
@@ -156,7 +158,7 @@ void AppendBlock(const BlockTask<Real>& task) {
     }
     if constexpr (!kWhole) hit = hn::And(hit, valid);
     const auto slots = hn::Add(iota, hn::Set(du, s));
-    std::uint32_t* HWY_RESTRICT const out = home.out + home.found;
+    std::uint32_t* HWY_RESTRICT const out = home.out;
     if constexpr (kCompressByTable) {  // at most 8 lanes: the mask is one byte
       std::uint8_t bits[8] = {};
       hn::StoreMaskBits(d, hit, bits);
@@ -168,7 +170,7 @@ void AppendBlock(const BlockTask<Real>& task) {
         const auto index = hn::LoadU(du8, detail::kCompressBytes[bits[0]].data());
         hn::StoreU(hn::TableLookupBytes(slots, hn::BitCast(du, index)), du, out);
       }
-      home.found += static_cast<std::size_t>(std::popcount(bits[0]));
+      home.out += std::popcount(bits[0]);
       return;
     }
     decltype(hn::FirstN(du, 0)) slot_hit;
@@ -184,7 +186,7 @@ void AppendBlock(const BlockTask<Real>& task) {
       slot_hit = hn::LoadMaskBits(du, bits);
     }
     hn::StoreU(hn::Compress(slots, slot_hit), du, out);
-    home.found += hn::CountTrue(du, slot_hit);
+    home.out += hn::CountTrue(du, slot_hit);
   };
   // The homes of `homes` at the indices kHome... against the range [s, end): each vector is
   // loaded once for all of them.
@@ -222,8 +224,7 @@ void AppendBlock(const BlockTask<Real>& task) {
                 hn::Set(d, pz[slot]),
                 kDiameters ? hn::Set(d, pd[slot]) : hn::Zero(d),
                 slot,
-                task.out[b],
-                0};
+                task.out[b]};
   }
   for (int r = 0; r < task.count; ++r) {
     const SlotRange range = task.ranges[r];
@@ -238,7 +239,9 @@ void AppendBlock(const BlockTask<Real>& task) {
       test_range(one_home, &home, home.slot + 1, range.end);
     }
   }
-  for (int b = 0; b < kHomes; ++b) task.found[b] = homes[b].found;
+  for (int b = 0; b < kHomes; ++b) {
+    task.found[b] = static_cast<std::size_t>(homes[b].out - task.out[b]);
+  }
 }
 
 template <bool kDiameters, class Real>
