@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 #include <set>
+#include <vector>
 
 #include "contactlab/kernels/error.hpp"
 #include "test_support.hpp"
@@ -148,6 +149,38 @@ TEST(CellGrid, CoordinatesAreInRangeAndMonotone) {
   EXPECT_FALSE(grid.in_range(-1, 0, 0));
   EXPECT_FALSE(grid.in_range(0, grid.dims()[1], 0));
   EXPECT_TRUE(grid.in_range(grid.dims()[0] - 1, grid.dims()[1] - 1, grid.dims()[2] - 1));
+}
+
+// keys_of (the registration's vectorised loop) is wide_key(coords_of(...)) point by point: on
+// both numberings, a dense and a wide grid, with points on the faces and just inside them.
+TEST(CellGrid, KeysOfArePointByPointKeys) {
+  const Box box{{-1.0, 0.0, 5.0}, {2.0, 1.0, 5.5}};
+  for (const double d : {0.037, 2e-6}) {  // 2e-6: keys past 32 bits
+    for (const auto numbering : {CellNumbering::kLinear, CellNumbering::kMorton}) {
+      const CellGrid grid(box, d, numbering);
+      std::vector<double> x, y, z;
+      Xoshiro256 rng(11);
+      for (int k = 0; k < 1000; ++k) {  // not a multiple of any vector length
+        x.push_back(-1.0 + 3.0 * rng.uniform());
+        y.push_back(rng.uniform());
+        z.push_back(5.0 + 0.5 * rng.uniform());
+      }
+      for (const double lo_or_hi : {0.0, 1.0}) {
+        x.push_back(lo_or_hi == 0.0 ? -1.0 : 2.0);
+        y.push_back(lo_or_hi);
+        z.push_back(lo_or_hi == 0.0 ? 5.0 : 5.5);
+        x.push_back(std::nextafter(2.0, 0.0));
+        y.push_back(std::nextafter(1.0, 0.0));
+        z.push_back(std::nextafter(5.5, 0.0));
+      }
+      std::vector<std::uint64_t> keys(x.size());
+      grid.keys_of(x.data(), y.data(), z.data(), x.size(), keys.data());
+      for (std::size_t i = 0; i < x.size(); ++i) {
+        const auto c = grid.coords_of(x[i], y[i], z[i]);
+        ASSERT_EQ(keys[i], grid.wide_key(c[0], c[1], c[2])) << "point " << i << ", D = " << d;
+      }
+    }
+  }
 }
 
 TEST(CellGrid, LinearKeysAreTheZYXOrder) {
