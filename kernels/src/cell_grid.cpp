@@ -130,26 +130,12 @@ void OccupiedCells::build_table(int threads) {
 
 void CellGrid::keys_of(const double* x, const double* y, const double* z, std::size_t count,
                        std::uint64_t* keys) const {
-  if (numbering_ == CellNumbering::kMorton) {
-    for (std::size_t i = 0; i < count; ++i) {
-      const auto c = coords_of(x[i], y[i], z[i]);
-      keys[i] = wide_key(c[0], c[1], c[2]);
-    }
-    return;
-  }
-  // axis_coord() with its members in locals: through `this`, each store to keys could alias
-  // them, and the loop would not be vectorised.
-  const double lx = lo_[0], ly = lo_[1], lz = lo_[2];
-  const double ix = inverse_width_[0], iy = inverse_width_[1], iz = inverse_width_[2];
-  const int mx = dims_[0] - 1, my = dims_[1] - 1, mz = dims_[2] - 1;
-  const std::uint64_t row = static_cast<std::uint64_t>(dims_[0]);
-  const std::uint64_t layer = row * static_cast<std::uint64_t>(dims_[1]);
+  // Through a local copy: through `this`, each store to keys could alias the grid's members,
+  // which would then be reloaded per point, and the loop would not be vectorised.
+  const CellGrid grid = *this;
   for (std::size_t i = 0; i < count; ++i) {
-    const int cx = std::min(static_cast<int>((x[i] - lx) * ix), mx);
-    const int cy = std::min(static_cast<int>((y[i] - ly) * iy), my);
-    const int cz = std::min(static_cast<int>((z[i] - lz) * iz), mz);
-    keys[i] = static_cast<std::uint64_t>(cz) * layer + static_cast<std::uint64_t>(cy) * row +
-              static_cast<std::uint64_t>(cx);
+    const auto c = grid.coords_of(x[i], y[i], z[i]);
+    keys[i] = grid.wide_key(c[0], c[1], c[2]);
   }
 }
 
