@@ -121,8 +121,10 @@ void ContactDetector::detect(const CellGrid& grid, const Layout& layout, const P
   const std::uint32_t n = static_cast<std::uint32_t>(registry_.slot_particle.size());
   const int threads = run.threads;
   const bool half = variant.stencil == Stencil::kHalf;
-  const traversal::Spec spec{grid,          registry_,     variant.loop, variant.stencil,
-                             options.homes, options.blocks};
+  // Tiles of sparse cells where the homes are tested in blocks (SimdContactTest).
+  const std::uint32_t tile_homes = ContactOp<PairTest>::kBlockHomes > 1 ? simd::kBlockHomes : 0;
+  const traversal::Spec spec{grid,          registry_,      variant.loop, variant.stencil,
+                             options.homes, options.blocks, tile_homes};
 
   if (thread_out_.size() < static_cast<std::size_t>(threads)) thread_out_.resize(threads);
   found_count_.resize(n);
@@ -139,17 +141,20 @@ void ContactDetector::detect(const CellGrid& grid, const Layout& layout, const P
   // Where thread 0's finds are the first rows as they stand, it writes them into the contact
   // list's storage: 110 MB not copied on the paper's scene at one thread. The storage is
   // reserved for the larger of the last run's entries (plus what its last homes may append: a
-  // block of them, each with the candidates of 27 cells of the fullest) and twice the entries the
-  // cell occupancies lead one to expect (about 27 (sum occupancy^2 - n) candidates, 0.155 of them
-  // within a sphere of diameter D in cells at least D wide: a first run's room); address space
-  // only until written. A scene with more moves thread 0 to a buffer of its own.
+  // block of them, each with the candidates of the nine rows of the longest tile, every cell the
+  // fullest) and twice the entries the cell occupancies lead one to expect (about
+  // 27 (sum occupancy^2 - n) candidates, 0.155 of them within a sphere of diameter D in cells at
+  // least D wide: a first run's room); address space only until written. A scene with more moves
+  // thread 0 to a buffer of its own.
   const bool rows_in_place = writes_first_rows_in_place(variant, threads);
   if (rows_in_place) {
     const double candidates = 27.0 * static_cast<double>(registry_.occupancy_squares - n);
-    const std::size_t wanted = std::max(
-        contacts_.partners.size() +
-            simd::kBlockHomes * (27 * std::size_t{registry_.max_occupancy}) + simd::kAppendSlack,
-        static_cast<std::size_t>(2.0 * 0.155 * candidates));
+    const std::size_t wanted =
+        std::max(contacts_.partners.size() +
+                     simd::kBlockHomes *
+                         (9 * (traversal::kTileCells + 2) * std::size_t{registry_.max_occupancy}) +
+                     simd::kAppendSlack,
+                 static_cast<std::size_t>(2.0 * 0.155 * candidates));
     if (contacts_.partners.capacity() < wanted) {
       contacts_.partners.clear();  // the last run's rows need not move along
       try {
@@ -188,6 +193,8 @@ void ContactDetector::detect(const CellGrid& grid, const Layout& layout, const P
   if (options.observer) options.observer->region_end();
   run.candidate_tests = 0;
   for (const auto t : thread_tests) run.candidate_tests += t;
+  run.tiled = tile_homes > 0 && variant.loop == LoopKind::kParticle &&
+              grid.numbering() == CellNumbering::kLinear;
   run.contact_pairs = contacts_.pair_count();
 }
 
@@ -396,20 +403,23 @@ void ContactDetector::with_layout(const Scene& scene, Precision precision, Detec
                                          diameters ? narrow_d_.data() : nullptr});
 }
 
-DetectRun ContactDetector::run(const Scene& scene, const DetectOptions& options) {
-  DetectRun run;
-  const CellGrid grid = prepare(scene, options, 0.0, run);
-  // SIMD where a home's stencil holds enough candidates on average: 27 cells of the mean
-  // occupancy a particle sees, itself not counted (uniform at D = 1/200: about 3.5).
-  const std::uint64_t n = scene.size();
+// SIMD where a home's stencil holds enough candidates on average: 27 cells of the mean
+// occupancy a particle sees, itself not counted (uniform at D = 1/200: about 3.5).
+bool ContactDetector::tests_on_lanes() const {
+  const std::size_t n = registry_.slot_particle.size();
   const double candidates_estimate =
       n == 0 ? 0.0
              : 27.0 * (static_cast<double>(registry_.occupancy_squares) / static_cast<double>(n) -
                        1.0);
-  const bool forced = simd_forced();
-  const bool simd = working_is_sorted_ && simd_enabled() &&
-                    (forced || candidates_estimate >= static_cast<double>(pair_ops::kSimdFrom));
-  const std::uint64_t scalar_below = forced ? 0 : pair_ops::kSimdFrom;
+  return working_is_sorted_ && simd_enabled() &&
+         (simd_forced() || candidates_estimate >= static_cast<double>(pair_ops::kSimdFrom));
+}
+
+DetectRun ContactDetector::run(const Scene& scene, const DetectOptions& options) {
+  DetectRun run;
+  const CellGrid grid = prepare(scene, options, 0.0, run);
+  const bool simd = tests_on_lanes();
+  const std::uint64_t scalar_below = simd_forced() ? 0 : pair_ops::kSimdFrom;
   with_layout(
       scene, options.variant.precision, run,
       [&](const auto& layout, ExactCoordinates exact, double extent) {
@@ -489,11 +499,13 @@ LoopWork ContactDetector::iteration_work(const Scene& scene, const DetectOptions
   work.homes.assign(iterations, 0);
   work.builds.assign(iterations, 0);
   WorkCountOp op{work};
+  // The tiles the contact test would use (its ranges, and so its tests and builds).
+  const std::uint32_t tile_homes = tests_on_lanes() ? simd::kBlockHomes : 0;
   // Only the cells are read: double coordinates in the working order, whatever the precision.
   with_layout(scene, Precision::kDouble, run, [&](const auto& layout, auto&&...) {
     traversal::traverse(
-        {grid, registry_, variant.loop, variant.stencil, options.homes, options.blocks}, layout,
-        op);
+        {grid, registry_, variant.loop, variant.stencil, options.homes, options.blocks, tile_homes},
+        layout, op);
   });
   if (options.blocks.all()) return work;
   // Loop order: the loop runs over this process's blocks only (k -> blocks.at(k)), so the

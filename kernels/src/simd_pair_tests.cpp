@@ -114,9 +114,19 @@ void AppendBlock(const BlockTask<Real>& task) {
   };
   // One home against a vector of candidates at slots s.. (c*: their coordinates) that `valid`
   // holds: a whole vector (kWhole) or a range's last one (the lanes before its end).
+  // In the homes' own row every home is tested against the whole vector too, and `kOwnRow` drops
+  // the slots it must not find: its own (full stencil) or those up to its own (half stencil).
   auto test_home = [&](HomeLanes& home, const std::uint32_t s, const std::uint32_t end, V cx, V cy,
-                       V cz, V cd, const auto valid, const auto whole_tag) CONTACTLAB_INLINE {
+                       V cz, V cd, const auto valid, const auto whole_tag,
+                       const auto own_row_tag) CONTACTLAB_INLINE {
     constexpr bool kWhole = decltype(whole_tag)::value;
+    constexpr bool kOwnRow = decltype(own_row_tag)::value;
+    const auto slots = hn::Add(iota, hn::Set(du, s));
+    // The slots the home may find, on the slots' lanes (used only in the own row).
+    auto partner_slots = [&] {
+      const auto own = hn::Set(du, home.slot);
+      return task.half ? hn::Gt(slots, own) : hn::Ne(slots, own);
+    };
     const auto dx = hn::Sub(home.x, cx);
     const auto dy = hn::Sub(home.y, cy);
     const auto dz = hn::Sub(home.z, cz);
@@ -134,6 +144,11 @@ void AppendBlock(const BlockTask<Real>& task) {
       if constexpr (!kWhole) {
         hit = hn::And(hit, valid);
         maybe = hn::And(maybe, valid);
+      }
+      if constexpr (kOwnRow) {  // float and slot lanes are the same width
+        const auto partner = hn::RebindMask(d, partner_slots());
+        hit = hn::And(hit, partner);
+        maybe = hn::And(maybe, partner);
       }
       const auto unsure = hn::AndNot(hit, maybe);
       if (!hn::AllFalse(d, unsure)) [[unlikely]] {  // lane by lane, the unsure ones in double
@@ -157,11 +172,15 @@ void AppendBlock(const BlockTask<Real>& task) {
       hit = hn::Le(hn::Mul(four, dist_sq), hn::Mul(sum, sum));
     }
     if constexpr (!kWhole) hit = hn::And(hit, valid);
-    const auto slots = hn::Add(iota, hn::Set(du, s));
     std::uint32_t* HWY_RESTRICT const out = home.out;
     if constexpr (kCompressByTable) {  // at most 8 lanes: the mask is one byte
       std::uint8_t bits[8] = {};
       hn::StoreMaskBits(d, hit, bits);
+      if constexpr (kOwnRow && !std::is_same_v<Real, float>) {  // float: dropped above
+        std::uint8_t partner_bits[8] = {};
+        hn::StoreMaskBits(du, partner_slots(), partner_bits);
+        bits[0] &= partner_bits[0];
+      }
       if constexpr (hn::MaxLanes(du) == 8) {
         const auto index = hn::LoadU(du, detail::kCompressLanes[bits[0]].data());
         hn::StoreU(hn::TableLookupLanes(slots, hn::IndicesFromVec(du, index)), du, out);
@@ -185,6 +204,9 @@ void AppendBlock(const BlockTask<Real>& task) {
       hn::StoreMaskBits(d, hit, bits);
       slot_hit = hn::LoadMaskBits(du, bits);
     }
+    if constexpr (kOwnRow && !std::is_same_v<Real, float>) {  // float: dropped above
+      slot_hit = hn::And(slot_hit, partner_slots());
+    }
     hn::StoreU(hn::Compress(slots, slot_hit), du, out);
     home.out += hn::CountTrue(du, slot_hit);
   };
@@ -195,7 +217,8 @@ void AppendBlock(const BlockTask<Real>& task) {
   const auto whole = hn::FirstN(d, lanes);
   const auto step = static_cast<std::uint32_t>(lanes);
   auto test_range = [&]<int... kHome>(std::integer_sequence<int, kHome...>, HomeLanes * homes,
-                                      std::uint32_t s, const std::uint32_t end) CONTACTLAB_INLINE {
+                                      std::uint32_t s, const std::uint32_t end,
+                                      const auto own_row_tag) CONTACTLAB_INLINE {
     auto test_vector = [&](const auto valid, const auto whole_tag) CONTACTLAB_INLINE {
       constexpr bool kWhole = decltype(whole_tag)::value;
       auto load = [&](const Real* p) {
@@ -208,13 +231,12 @@ void AppendBlock(const BlockTask<Real>& task) {
       const V cx = load(px), cy = load(py), cz = load(pz);
       V cd = hn::Zero(d);
       if constexpr (kDiameters) cd = load(pd);
-      (test_home(homes[kHome], s, end, cx, cy, cz, cd, valid, whole_tag), ...);
+      (test_home(homes[kHome], s, end, cx, cy, cz, cd, valid, whole_tag, own_row_tag), ...);
     };
     for (; end - s >= step; s += step) test_vector(whole, std::true_type{});  // s <= end
     if (s < end) test_vector(hn::FirstN(d, end - s), std::false_type{});
   };
   const auto all_homes = std::make_integer_sequence<int, kHomes>{};
-  const auto one_home = std::make_integer_sequence<int, 1>{};
 
   HomeLanes homes[kHomes];
   for (int b = 0; b < kHomes; ++b) {
@@ -229,14 +251,13 @@ void AppendBlock(const BlockTask<Real>& task) {
   for (int r = 0; r < task.count; ++r) {
     const SlotRange range = task.ranges[r];
     if (r != task.own) {
-      test_range(all_homes, homes, range.begin, range.end);
-      continue;
-    }
-    // The row of the homes' cell: each home skips its own slot (and with the half stencil the
-    // slots before it), one home at a time.
-    for (HomeLanes& home : homes) {
-      if (!task.half) test_range(one_home, &home, range.begin, home.slot);
-      test_range(one_home, &home, home.slot + 1, range.end);
+      test_range(all_homes, homes, range.begin, range.end, std::false_type{});
+    } else {
+      // The row of the homes' cell, for all homes at once, each dropping its own slot (and with
+      // the half stencil the slots before it): a pass per home had loaded each vector once per
+      // home, and a sparse cell's homes paid two part-filled vectors each.
+      test_range(all_homes, homes, task.half ? homes[0].slot + 1 : range.begin, range.end,
+                 std::true_type{});
     }
   }
   for (int b = 0; b < kHomes; ++b) {

@@ -68,6 +68,7 @@ struct Reference {
   double diameter = 0.0;
   ContactList contacts;  // the double test's: float variants find them too
   std::uint64_t full_candidates = 0;
+  TiledCandidates tiled;  // where the run shares sparse cells' ranges as tiles
 };
 
 const Reference& reference_for(SceneKind kind) {
@@ -80,6 +81,7 @@ const Reference& reference_for(SceneKind kind) {
     ref.diameter = setup.diameter;
     ref.contacts = brute_force_contacts(ref.scene, ref.diameter);
     ref.full_candidates = expected_full_candidates(ref.scene, ref.diameter);
+    ref.tiled = expected_tiled_candidates(ref.scene, ref.diameter);
     it = cache.emplace(kind, std::move(ref)).first;
   }
   return it->second;
@@ -110,6 +112,7 @@ TEST_P(EveryVariantMatchesBruteForce, AllSchedulesAndThreadCounts) {
   const ContactList& expected = ref.contacts;
   const std::uint64_t expected_candidates =
       stencil == Stencil::kFull ? ref.full_candidates : ref.full_candidates / 2;
+  const std::uint64_t expected_tiled = stencil == Stencil::kFull ? ref.tiled.full : ref.tiled.half;
   const CellGrid grid(ref.scene.box,
                       ref.scene.has_diameters() ? ref.scene.max_diameter() : ref.diameter,
                       CellNumbering::kLinear);
@@ -126,8 +129,12 @@ TEST_P(EveryVariantMatchesBruteForce, AllSchedulesAndThreadCounts) {
       ++runs;
       EXPECT_TRUE(same_contacts(d.contacts, expected));
       EXPECT_EQ(d.run.contact_pairs, expected.pair_count());
-      // The same for every schedule and thread count, and (full) twice the half stencil's.
-      EXPECT_EQ(d.run.candidate_tests, expected_candidates);
+      // The same for every schedule and thread count, and without tiles (full) twice the half
+      // stencil's.
+      EXPECT_EQ(d.run.candidate_tests, d.run.tiled ? expected_tiled : expected_candidates);
+      // Tiles: the particle loop over particles in linear cell order, tested on SIMD lanes.
+      EXPECT_TRUE(!d.run.tiled ||
+                  (loop == LoopKind::kParticle && order == Order::kSorted && simd_enabled()));
       EXPECT_EQ(d.run.threads, threads);
       EXPECT_EQ(d.run.thread_busy_s.size(), static_cast<std::size_t>(threads));
       EXPECT_EQ(d.run.grid_dims, grid.dims());
@@ -219,7 +226,8 @@ TEST(SimdTarget, ListsTheScalarLoopAndRefusesUnknownNames) {
 }
 
 // The candidate count does not depend on the loop or the order either, and the full stencil
-// makes exactly twice the half stencil's tests (each unordered pair once from each side).
+// makes exactly twice the half stencil's tests (each unordered pair once from each side); with
+// tiles (the particle loop in cell order on SIMD lanes) the tiles' counts.
 TEST(CandidateTests, FullIsTwiceHalfForEveryLoopAndOrder) {
   const Reference& ref = reference_for(SceneKind::kBlobs);
   ASSERT_EQ(ref.full_candidates % 2, 0u);
@@ -231,8 +239,15 @@ TEST(CandidateTests, FullIsTwiceHalfForEveryLoopAndOrder) {
             ref.scene, Variant{loop, order, Stencil::kFull, schedule, precision}, ref.diameter, 1);
         const Detected half = detect(
             ref.scene, Variant{loop, order, Stencil::kHalf, schedule, precision}, ref.diameter, 1);
-        EXPECT_EQ(full.run.candidate_tests, 2 * half.run.candidate_tests)
-            << to_string(loop) << "/" << to_string(order) << "/" << to_string(precision);
+        SCOPED_TRACE(std::string(to_string(loop)) + "/" + std::string(to_string(order)) + "/" +
+                     std::string(to_string(precision)));
+        EXPECT_EQ(full.run.tiled, half.run.tiled);
+        if (full.run.tiled) {
+          EXPECT_EQ(full.run.candidate_tests, ref.tiled.full);
+          EXPECT_EQ(half.run.candidate_tests, ref.tiled.half);
+          continue;
+        }
+        EXPECT_EQ(full.run.candidate_tests, 2 * half.run.candidate_tests);
         EXPECT_EQ(full.run.candidate_tests, ref.full_candidates);
       }
     }

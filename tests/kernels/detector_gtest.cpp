@@ -131,6 +131,7 @@ TEST(Detector, IterationWorkIsWhatEachIterationDoes) {
     if (poly) spec.kind = SceneKind::kPolydisperse;
     const Scene scene = generate_scene(spec);
     const auto per_particle = expected_full_candidates_per_particle(scene, spec.diameter);
+    const TiledCandidates tiled = expected_tiled_candidates(scene, spec.diameter);
     for (const Variant& v : covering_variants()) {
       SCOPED_TRACE(to_string(v) + (poly ? " polydisperse" : ""));
       ContactDetector detector;
@@ -180,9 +181,12 @@ TEST(Detector, IterationWorkIsWhatEachIterationDoes) {
         ASSERT_EQ(work.size(), scene.size());
         EXPECT_TRUE(std::all_of(loop.homes.begin(), loop.homes.end(),
                                 [](std::uint32_t h) { return h == 1; }));
-        // In cell order the particles of a cell are consecutive: one build per occupied cell.
-        // In input order almost every particle starts a new cell.
-        if (v.order != Order::kUnsorted) {
+        // In cell order the particles of a cell are consecutive: one build per occupied cell,
+        // or per tile. In input order almost every particle starts a new cell.
+        if (run.tiled) {
+          EXPECT_EQ(builds, tiled.tiles);
+          EXPECT_LT(builds, occupied.size());
+        } else if (v.order != Order::kUnsorted) {
           EXPECT_EQ(builds, occupied.size());
         } else {
           EXPECT_GE(builds, occupied.size());
@@ -192,7 +196,8 @@ TEST(Detector, IterationWorkIsWhatEachIterationDoes) {
           const auto map = detector.working_to_input();
           for (std::size_t h = 0; h < work.size(); ++h) {
             const std::size_t input = map.empty() ? h : map[h];
-            ASSERT_EQ(work[h], per_particle[input]) << "iteration " << h;
+            ASSERT_EQ(work[h], run.tiled ? tiled.full_per_particle[input] : per_particle[input])
+                << "iteration " << h;
           }
         }
       }

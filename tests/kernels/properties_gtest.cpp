@@ -107,6 +107,7 @@ TEST(Property, SameResultForEveryThreadCountAndSchedule) {
       same_contacts(reference[Precision::kDouble].contacts, brute_force_contacts(scene, 0.02)));
   ASSERT_TRUE(
       same_contacts(reference[Precision::kFloat].contacts, reference[Precision::kDouble].contacts));
+  const TiledCandidates tiled = expected_tiled_candidates(scene, 0.02);
   int failures = 0;
   for (const Variant& v : every_variant()) {
     const Detected& want = reference[v.precision];
@@ -116,6 +117,10 @@ TEST(Property, SameResultForEveryThreadCountAndSchedule) {
       if (!same) {
         ADD_FAILURE() << to_string(v) << " threads=" << threads << ": " << same.message();
         if (++failures >= 5) return;
+      }
+      if (got.run.tiled) {  // the tiles' counts: the same for every schedule too
+        EXPECT_EQ(got.run.candidate_tests, v.stencil == Stencil::kFull ? tiled.full : tiled.half);
+        continue;
       }
       EXPECT_EQ(got.run.candidate_tests, v.stencil == Stencil::kFull
                                              ? want.run.candidate_tests

@@ -31,7 +31,11 @@ std::string disagreement(const Scene& scene, double d, const Variant& variant, i
   if (got.run.contact_pairs != expected.pair_count())
     out << " contact_pairs " << got.run.contact_pairs;
   const std::uint64_t full = expected_full_candidates(scene, d);
-  const std::uint64_t want = variant.stencil == Stencil::kFull ? full : full / 2;
+  std::uint64_t want = variant.stencil == Stencil::kFull ? full : full / 2;
+  if (got.run.tiled) {
+    const TiledCandidates tiled = expected_tiled_candidates(scene, d);
+    want = variant.stencil == Stencil::kFull ? tiled.full : tiled.half;
+  }
   if (got.run.candidate_tests != want)
     out << " candidate_tests " << got.run.candidate_tests << " != " << want;
   return out.str();

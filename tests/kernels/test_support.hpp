@@ -13,6 +13,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <set>
 #include <sstream>
 #include <string>
 #include <utility>
@@ -223,6 +224,73 @@ inline std::uint64_t expected_full_candidates(const Scene& scene, double diamete
   std::uint64_t total = 0;
   for (const auto t : expected_full_candidates_per_particle(scene, diameter)) total += t;
   return total;
+}
+
+// The candidates of the particle loop over sorted particles when sparse cells share their
+// ranges as tiles (DetectRun::tiled), from the cell occupancy and the rule of traverse.hpp's
+// find_tile: the aligned group of traversal::kTileCells cells along x holding a cell is its tile
+// if it holds at most simd::kBlockHomes particles, else the group's half holding it, and so on
+// down to the cell alone. A tile's rows reach from its first cell's x - 1 to its last one's
+// x + 1; the half stencil's own row starts at its first cell.
+struct TiledCandidates {
+  std::vector<std::uint64_t> full_per_particle;
+  std::uint64_t full = 0, half = 0;
+  std::uint64_t tiles = 0;
+};
+
+inline TiledCandidates expected_tiled_candidates(const Scene& scene, double diameter) {
+  constexpr int kCells = 8;            // traversal::kTileCells
+  constexpr std::uint64_t kLimit = 4;  // simd::kBlockHomes
+  const double width = scene.has_diameters() ? scene.max_diameter() : diameter;
+  const CellGrid grid(scene.box, width, CellNumbering::kLinear);
+  const auto dims = grid.dims();
+  std::vector<std::uint64_t> count(grid.cell_count(), 0);
+  std::vector<std::array<int, 3>> cell(scene.size());
+  for (std::size_t i = 0; i < scene.size(); ++i) {
+    cell[i] = grid.coords_of(scene.x[i], scene.y[i], scene.z[i]);
+    ++count[grid.key(cell[i][0], cell[i][1], cell[i][2])];
+  }
+  // Particles in cells x_lo..x_hi (clipped) of row (cy, cz).
+  auto row = [&](int x_lo, int x_hi, int cy, int cz) {
+    std::uint64_t sum = 0;
+    if (cy < 0 || cz < 0 || cy >= dims[1] || cz >= dims[2]) return sum;
+    for (int cx = std::max(x_lo, 0); cx <= std::min(x_hi, dims[0] - 1); ++cx)
+      sum += count[grid.key(cx, cy, cz)];
+    return sum;
+  };
+  auto tile_of = [&](int cx, int cy, int cz) -> std::array<int, 2> {
+    if (count[grid.key(cx, cy, cz)] > kLimit) return {cx, cx};
+    for (int size = kCells; size > 1; size /= 2) {
+      const int first = cx - cx % size, last = std::min(first + size, dims[0]) - 1;
+      if (row(first, last, cy, cz) <= kLimit) return {first, last};
+    }
+    return {cx, cx};
+  };
+  TiledCandidates result;
+  std::set<std::array<int, 4>> tiles;  // first, last, cy, cz
+  result.full_per_particle.resize(scene.size());
+  for (std::size_t i = 0; i < scene.size(); ++i) {
+    const auto [cx, cy, cz] = cell[i];
+    const auto [first, last] = tile_of(cx, cy, cz);
+    tiles.insert({first, last, cy, cz});
+    std::uint64_t tests = 0;
+    for (int dz = -1; dz <= 1; ++dz) {
+      for (int dy = -1; dy <= 1; ++dy) tests += row(first - 1, last + 1, cy + dy, cz + dz);
+    }
+    result.full_per_particle[i] = tests - 1;  // not itself
+    result.full += tests - 1;
+  }
+  for (const auto& [first, last, cy, cz] : tiles) {
+    // The tile's particles are the first of its own row, in slot order.
+    const std::uint64_t homes = row(first, last, cy, cz);
+    const std::uint64_t forward =
+        row(first - 1, last + 1, cy + 1, cz) + row(first - 1, last + 1, cy - 1, cz + 1) +
+        row(first - 1, last + 1, cy, cz + 1) + row(first - 1, last + 1, cy + 1, cz + 1);
+    const std::uint64_t own = row(first, last + 1, cy, cz);
+    for (std::uint64_t p = 0; p < homes; ++p) result.half += forward + own - p - 1;
+  }
+  result.tiles = tiles.size();
+  return result;
 }
 
 // A permutation of 0..n-1 from a fixed seed (Fisher-Yates on xoshiro: the same on every

@@ -6,6 +6,7 @@
 #include <string>
 
 #include "contactlab/kernels/error.hpp"
+#include "contactlab/kernels/simd.hpp"
 #include "test_support.hpp"
 
 namespace contactlab::test {
@@ -189,6 +190,69 @@ TEST(Ghosts, AreCandidatesButNeverHomes) {
       }
     }
   }
+}
+
+// Where homes are tested in blocks on SIMD lanes, a sparse cell and the occupied cells after it
+// along x (up to traversal::kTileCells, at most simd::kBlockHomes particles) share one range
+// build as a tile, with rows a cell longer per cell joined. On rows of cells holding 0 to 3
+// particles with gaps of 0 to 7 cells, the last cells of the grid's rows among them: the tiles
+// form (fewer builds than occupied cells), every row is the scalar loop's entry for entry (same
+// partners, same order), and the contacts are the brute force's, with the dense and the hashed
+// index, both stencils, double and float.
+TEST(Tiles, SparseCellsAlongXShareRangesAndKeepEveryRow) {
+  const double diameter = 0.1;  // 10 cells along each axis
+  Xoshiro256 rng(31);
+  std::vector<Point> points;
+  for (int row = 0; row < 60; ++row) {
+    const double y = rng.uniform(), z = rng.uniform();
+    for (int cell = static_cast<int>(rng.uniform() * 3); cell < 10;
+         cell += 1 + static_cast<int>(rng.uniform() * 8)) {
+      const int count = 1 + static_cast<int>(rng.uniform() * 3);
+      for (int k = 0; k < count; ++k) {
+        // Near the row's line, so that neighbours along x and across rows touch.
+        points.push_back({(cell + rng.uniform()) * diameter,
+                          std::min(1.0, y + 0.3 * diameter * rng.uniform()),
+                          std::min(1.0, z + 0.3 * diameter * rng.uniform())});
+      }
+    }
+    points.push_back({1.0, y, z});  // on the box's upper face: the last cell of the row
+  }
+  const Scene scene = make_scene(points);
+  const ContactList expected = brute_force_contacts(scene, diameter);
+  ASSERT_GT(expected.pair_count(), 100u);
+
+  auto detect_with = [&](const std::string& target, const std::string& variant, int threads,
+                         std::size_t* builds) {
+    select_simd_target(target);
+    ContactDetector detector;
+    DetectOptions options;
+    options.variant = parse_variant(variant);
+    options.diameter = diameter;
+    options.threads = threads;
+    detector.run(scene, options);
+    const LoopWork work = detector.iteration_work(scene, options);
+    *builds = static_cast<std::size_t>(std::count(work.builds.begin(), work.builds.end(), 1));
+    return std::pair{detector.contacts(), detector.canonical_contacts()};
+  };
+  for (const std::string& target : simd_targets()) {
+    if (target == "off") continue;
+    for (const char* variant :
+         {"particle/sorted/full/static", "particle/sorted/half/static",
+          "particle/sorted/full/dynamic,5/float", "particle/sorted/half/static/float",
+          "particle/sorted/full/static/grid=hashed", "particle/sorted/half/static/grid=hashed"}) {
+      for (const int threads : {1, 2}) {
+        SCOPED_TRACE(target + " " + variant + " threads=" + std::to_string(threads));
+        std::size_t cells = 0, tiles = 0;
+        const auto [scalar, scalar_canonical] = detect_with("off", variant, threads, &cells);
+        const auto [lanes, lanes_canonical] = detect_with(target, variant, threads, &tiles);
+        EXPECT_LT(tiles, cells * 9 / 10);
+        EXPECT_TRUE(lanes.offsets == scalar.offsets);
+        EXPECT_TRUE(lanes.partners == scalar.partners);
+        EXPECT_TRUE(same_contacts(lanes_canonical, expected));
+      }
+    }
+  }
+  select_simd_target("best");
 }
 
 }  // namespace

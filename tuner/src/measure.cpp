@@ -70,6 +70,7 @@ RunRecord measure_detection(ContactDetector& detector, const Scene& scene,
                         {"contact_pairs", last.contact_pairs},
                         {"max_cell_occupancy", last.max_cell_occupancy},
                         {"hashed_index", last.hashed_index ? 1u : 0u},
+                        {"tiled", last.tiled ? 1u : 0u},
                         {"cell_index_bytes", last.index_bytes}};
 
   const auto [lo, hi] = std::minmax_element(contact_counts.begin(), contact_counts.end());

@@ -159,7 +159,10 @@ struct DetectRun {
   double detect_s = 0.0;  // T_c: pair tests and contact lists
   double total_s() const { return setup_s + detect_s; }
   std::vector<double> thread_busy_s;  // each thread's time inside the detection loop
-  std::uint64_t candidate_tests = 0;  // pair tests made (each pair twice with the full stencil)
+  // Pair tests made (each pair twice with the full stencil): the stencil's candidates, and with
+  // tiles those of the tiles' longer rows too.
+  std::uint64_t candidate_tests = 0;
+  bool tiled = false;  // sparse cells shared their ranges as tiles (traverse.hpp: find_tile)
   std::uint64_t contact_pairs = 0;
   std::uint32_t max_cell_occupancy = 0;
   std::array<int, 3> grid_dims{};
@@ -224,6 +227,9 @@ class ContactDetector {
   template <class Layout, class PairTest>
   void detect(const CellGrid& grid, const Layout& layout, const PairTest& test,
               const DetectOptions& options, DetectRun& run);
+  // Whether the prepared particles' contact test runs on SIMD lanes (in blocks of homes, with
+  // tiles of sparse cells): run() and iteration_work() decide alike.
+  bool tests_on_lanes() const;
   void assemble_rows(int thread, int threads, bool half, bool rows_in_blocks);
   void copy_row_blocks(int thread, int threads);
 
