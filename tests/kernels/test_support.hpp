@@ -192,17 +192,31 @@ inline ::testing::AssertionResult well_formed(const ContactList& list) {
 // Pair tests the full 27-cell stencil makes for each particle, counted independently of the
 // detector: the particles of the (up to) 27 cells around its cell, less itself. The half
 // stencil makes exactly half as many in total.
+// The grid of a scene's detection in linear numbering, each particle's cell and each cell's
+// particle count.
+struct CellCounts {
+  CellGrid grid;
+  std::array<int, 3> dims;
+  std::vector<std::uint64_t> count;      // by key
+  std::vector<std::array<int, 3>> cell;  // by particle
+};
+
+inline CellCounts cell_counts(const Scene& scene, double diameter) {
+  const double width = scene.has_diameters() ? scene.max_diameter() : diameter;
+  CellCounts c{CellGrid(scene.box, width, CellNumbering::kLinear), {}, {}, {}};
+  c.dims = c.grid.dims();
+  c.count.assign(c.grid.cell_count(), 0);
+  c.cell.resize(scene.size());
+  for (std::size_t i = 0; i < scene.size(); ++i) {
+    c.cell[i] = c.grid.coords_of(scene.x[i], scene.y[i], scene.z[i]);
+    ++c.count[c.grid.key(c.cell[i][0], c.cell[i][1], c.cell[i][2])];
+  }
+  return c;
+}
+
 inline std::vector<std::uint64_t> expected_full_candidates_per_particle(const Scene& scene,
                                                                         double diameter) {
-  const double width = scene.has_diameters() ? scene.max_diameter() : diameter;
-  const CellGrid grid(scene.box, width, CellNumbering::kLinear);
-  const auto dims = grid.dims();
-  std::vector<std::uint64_t> count(grid.cell_count(), 0);
-  std::vector<std::array<int, 3>> cell(scene.size());
-  for (std::size_t i = 0; i < scene.size(); ++i) {
-    cell[i] = grid.coords_of(scene.x[i], scene.y[i], scene.z[i]);
-    ++count[grid.key(cell[i][0], cell[i][1], cell[i][2])];
-  }
+  const auto [grid, dims, count, cell] = cell_counts(scene, diameter);
   std::vector<std::uint64_t> tests(scene.size(), 0);
   for (std::size_t i = 0; i < scene.size(); ++i) {
     for (int dz = -1; dz <= 1; ++dz) {
@@ -241,15 +255,7 @@ struct TiledCandidates {
 inline TiledCandidates expected_tiled_candidates(const Scene& scene, double diameter) {
   constexpr int kCells = 8;            // traversal::kTileCells
   constexpr std::uint64_t kLimit = 4;  // simd::kBlockHomes
-  const double width = scene.has_diameters() ? scene.max_diameter() : diameter;
-  const CellGrid grid(scene.box, width, CellNumbering::kLinear);
-  const auto dims = grid.dims();
-  std::vector<std::uint64_t> count(grid.cell_count(), 0);
-  std::vector<std::array<int, 3>> cell(scene.size());
-  for (std::size_t i = 0; i < scene.size(); ++i) {
-    cell[i] = grid.coords_of(scene.x[i], scene.y[i], scene.z[i]);
-    ++count[grid.key(cell[i][0], cell[i][1], cell[i][2])];
-  }
+  const auto [grid, dims, count, cell] = cell_counts(scene, diameter);
   // Particles in cells x_lo..x_hi (clipped) of row (cy, cz).
   auto row = [&](int x_lo, int x_hi, int cy, int cz) {
     std::uint64_t sum = 0;
