@@ -277,34 +277,45 @@ void CellRegistry::sort_and_index(const CellGrid& grid, const Scene& scene, std:
     }
     // Slots in key order. A cell starts at slot s when s == 0 or slot s - 1 has another key.
     auto starts_cell = [&](std::size_t s) { return s == 0 || in[s - 1].key() != in[s].key(); };
-    // Each cell's occupancy is counted by the thread where it starts: from one start to the
-    // next, and for the last cell of the range up to its end, possibly in the next range.
-    auto count_cell = [&](std::size_t first, std::size_t end) {
-      largest = std::max(largest, static_cast<std::uint32_t>(end - first));
-      squares += std::uint64_t{end - first} * (end - first);
-    };
+    // One pass without branches on the data (in a clustered scene whether a slot starts a cell
+    // is a coin toss). The occupancies' sum of squares and maximum by each slot's rank r in its
+    // cell: a cell of m slots adds 2r + 1 over r < m, which is m^2, and its last slot r + 1 = m,
+    // wherever the threads' ranges cut it.
     std::uint64_t cells_here = 0;
-    std::size_t cell_start = e;  // of the last cell started in this range; e = none yet
-    for (std::size_t s = b; s < e; ++s) {
-      slot_particle[s] = in[s].index();
-      if (!starts_cell(s)) continue;
-      if (cell_start != e) count_cell(cell_start, s);
-      cell_start = s;
-      ++cells_here;
-      const std::uint64_t slot_key = in[s].key();
-      if (!hashed) {
-        // cell_begin[k] = first slot whose key is >= k. Each thread fills the keys from the one
-        // after the previous slot's up to its cell's: disjoint ranges.
-        const std::uint64_t previous = s == 0 ? 0 : in[s - 1].key() + 1;
-        for (std::uint64_t k = previous; k <= slot_key; ++k) {
-          cell_begin[k] = static_cast<std::uint32_t>(s);
+    if (b < e) {
+      std::size_t cell_start = b;  // of the cell holding slot b: it may begin in an earlier range
+      while (cell_start > 0 && in[cell_start - 1].key() == in[b].key()) --cell_start;
+      std::uint64_t previous = b == 0 ? ~std::uint64_t{0} : in[b - 1].key();  // ~0: none
+      // cell_begin[k] = the first slot whose key is >= k: the cell starting at slot s sets it
+      // for the keys after the previous slot's up to its own. Each thread sets those its slots
+      // start, up to its last slot's key (the next range sets the ones after): disjoint. Every
+      // slot stores kFill entries from the key after the previous slot's, one vector store,
+      // without asking whether it starts a cell or how far the gap reaches: entries past the
+      // gap are set again by the slots after it, and only a gap longer than kFill or the range's
+      // last keys take the exact loop.
+      constexpr std::uint64_t kFill = 16;
+      const std::uint64_t last_key = in[e - 1].key();
+      std::uint32_t* const begin_of = hashed ? nullptr : cell_begin.data();
+      for (std::size_t s = b; s < e; ++s) {
+        const std::uint64_t key = in[s].key();
+        slot_particle[s] = in[s].index();
+        const bool starts = key != previous;
+        cells_here += starts;
+        cell_start = starts ? s : cell_start;
+        const std::uint64_t rank = s - cell_start;
+        squares += 2 * rank + 1;
+        largest = std::max(largest, static_cast<std::uint32_t>(rank + 1));
+        if (begin_of) {
+          const auto slot = static_cast<std::uint32_t>(s);
+          std::uint64_t k = previous + 1;
+          if (k + kFill - 1 <= last_key) {
+            for (std::uint64_t j = 0; j < kFill; ++j) begin_of[k + j] = slot;
+            k += kFill;
+          }
+          for (; k <= key; ++k) begin_of[k] = slot;
         }
+        previous = key;
       }
-    }
-    if (cell_start != e) {
-      std::size_t end = e;
-      while (end < n && in[end].key() == in[cell_start].key()) ++end;
-      count_cell(cell_start, end);
     }
     if (!hashed && t + 1 == size) {  // the keys past the last particle's (all when there is none)
       const std::uint64_t after = n == 0 ? 0 : in[n - 1].key() + 1;

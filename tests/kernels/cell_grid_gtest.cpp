@@ -255,15 +255,19 @@ void check_registry(const CellGrid& grid, const Scene& scene, int threads) {
     ASSERT_LT(slot, registry.cell_begin[key + 1]);
   }
   std::uint32_t largest = 0;
+  std::uint64_t squares = 0;
   for (std::uint64_t k = 0; k < grid.key_count(); ++k) {
     ASSERT_EQ(registry.cell_begin[k + 1] - registry.cell_begin[k], count[k]) << "key " << k;
     largest = std::max(largest, count[k]);
+    squares += std::uint64_t{count[k]} * count[k];
     // Sorted by key stably: within a cell, input order.
     for (std::uint32_t s = registry.cell_begin[k] + 1; s < registry.cell_begin[k + 1]; ++s) {
       ASSERT_LT(registry.slot_particle[s - 1], registry.slot_particle[s]) << "key " << k;
     }
   }
+  // Also where a cell runs across the threads' ranges of slots (D = 0.6: 8 cells).
   EXPECT_EQ(registry.max_occupancy, largest);
+  EXPECT_EQ(registry.occupancy_squares, squares);
 
   // With a `sorted` output: the same registration, and the particles copied in slot order.
   CellRegistry with_copy;
