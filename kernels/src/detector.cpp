@@ -193,8 +193,7 @@ void ContactDetector::detect(const CellGrid& grid, const Layout& layout, const P
   if (options.observer) options.observer->region_end();
   run.candidate_tests = 0;
   for (const auto t : thread_tests) run.candidate_tests += t;
-  run.tiled = tile_homes > 0 && variant.loop == LoopKind::kParticle &&
-              grid.numbering() == CellNumbering::kLinear;
+  run.tiled = traversal::uses_tiles(spec);
   run.contact_pairs = contacts_.pair_count();
 }
 

@@ -27,6 +27,7 @@
 #include "contactlab/kernels/rng.hpp"
 #include "contactlab/kernels/scene.hpp"
 #include "contactlab/kernels/scene_generate.hpp"
+#include "contactlab/kernels/traverse.hpp"
 #include "contactlab/kernels/variant.hpp"
 
 namespace contactlab::test {
@@ -253,7 +254,7 @@ struct TiledCandidates {
 };
 
 inline TiledCandidates expected_tiled_candidates(const Scene& scene, double diameter) {
-  constexpr int kCells = 8;            // traversal::kTileCells
+  constexpr int kCells = traversal::kTileCells;
   constexpr std::uint64_t kLimit = 4;  // simd::kBlockHomes
   const auto [grid, dims, count, cell] = cell_counts(scene, diameter);
   // Particles in cells x_lo..x_hi (clipped) of row (cy, cz).

@@ -205,6 +205,13 @@ struct Spec {
   std::uint32_t tile_homes = 0;
 };
 
+// Whether the traversal of `spec` makes tiles: the particle loop (cells visited in slot order)
+// with the linear numbering (a row's cells are consecutive keys), where the op asked for them.
+inline bool uses_tiles(const Spec& spec) {
+  return spec.tile_homes > 0 && spec.loop == LoopKind::kParticle &&
+         spec.grid.numbering() == CellNumbering::kLinear;
+}
+
 // The most cells along x a tile spans (a power of two, see find_tile). On the paper's scene,
 // tiles of up to eight cells and four particles cut the range builds from 601,000 to 394,000
 // (docs/architecture.md).
@@ -296,7 +303,7 @@ void traverse_with(const Spec& spec, const Index& index, const Layout& layout, O
   // Homes of one cell waiting to be visited together (ops with kBlockHomes > 1): they share the
   // ranges in `nb`, so the block is visited before `nb` is built for another cell.
   constexpr int kBlock = block_homes<Op>();
-  const bool tiles = spec.tile_homes > 0 && grid.numbering() == CellNumbering::kLinear;
+  const bool tiles = uses_tiles(spec);
   std::array<Home, kBlock> block;
   int waiting = 0;
   auto flush = [&] {
