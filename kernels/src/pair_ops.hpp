@@ -202,7 +202,7 @@ class ContactOp {
     test_.append_block(homes, count, nb, half, out.data(), found.data());
     std::size_t at = found[0];
     for (int b = 1; b < count; ++b) {
-      std::memcpy(row + at, out[b], found[b] * sizeof(std::uint32_t));
+      move_behind(row + at, out[b], found[b]);
       at += found[b];
     }
     for (int b = 0; b < count; ++b) record(homes[b], found[b]);
@@ -211,6 +211,20 @@ class ContactOp {
   std::size_t homes_visited() const { return visited_; }
 
  private:
+  // Copies a block home's row behind the ones before it. Rows of up to kShortRow partners (a
+  // sparse tile's home finds none to three) are one copy of fixed size, inlined: a call to
+  // memcpy per such row cost more than the copy. Both sides have kAppendSlack entries of room
+  // past the row (the spilled rows each, the block's first row behind all of them).
+  static constexpr std::size_t kShortRow = 16;
+  static_assert(kShortRow <= simd::kAppendSlack);
+  static void move_behind(std::uint32_t* to, const std::uint32_t* from, std::size_t count) {
+    if (count <= kShortRow) {
+      std::memcpy(to, from, kShortRow * sizeof(std::uint32_t));
+    } else {
+      std::memcpy(to, from, count * sizeof(std::uint32_t));
+    }
+  }
+
   void record(const Home& home, std::size_t found) {
     out_.advance(found);
     found_count_[home.particle] = static_cast<std::uint32_t>(found);

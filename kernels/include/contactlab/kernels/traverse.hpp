@@ -217,6 +217,9 @@ inline bool uses_tiles(const Spec& spec) {
 // (docs/architecture.md).
 inline constexpr int kTileCells = 8;
 
+// How far past a stencil row's end its coordinates are prefetched at each range build.
+inline constexpr int kRowBytesAhead = 128;
+
 // The tile holding the occupied cell at x (key `key`) in its row along x: cells first..last and
 // their slots. The aligned group of kTileCells cells holding x is one tile if it holds at most
 // `limit` particles; else its half holding x, and so on down to the cell alone. Tiles thus
@@ -306,6 +309,19 @@ void traverse_with(const Spec& spec, const Index& index, const Layout& layout, O
   const bool tiles = uses_tiles(spec);
   std::array<Home, kBlock> block;
   int waiting = 0;
+  // After each build, the stencil rows' coordinates a little past their ends are fetched: the
+  // next tiles along x read there, and the rows of the next y and z read there for the first
+  // time (nine rows of three arrays are more streams than the hardware's prefetchers follow).
+  auto prefetch_rows_ahead = [&] {
+    if constexpr (Op::kTestsPairs && Layout::kIdsAreSlots) {
+      for (int r = 0; r < nb.count; ++r) {
+        const std::uint32_t end = nb.ranges[r].end;
+        __builtin_prefetch(reinterpret_cast<const char*>(layout.x + end) + kRowBytesAhead);
+        __builtin_prefetch(reinterpret_cast<const char*>(layout.y + end) + kRowBytesAhead);
+        __builtin_prefetch(reinterpret_cast<const char*>(layout.z + end) + kRowBytesAhead);
+      }
+    }
+  };
   auto flush = [&] {
     if constexpr (kBlock > 1) {
       if (waiting > 0) op.visit_block(block.data(), waiting, nb, kHalf);
@@ -359,6 +375,7 @@ void traverse_with(const Spec& spec, const Index& index, const Layout& layout, O
               cached_cell = index.cell_slots(key);
               nb.build(grid, index, stencil, home);
             }
+            prefetch_rows_ahead();
           }
         }
         visit(h, s_h, h, built);
@@ -376,6 +393,7 @@ void traverse_with(const Spec& spec, const Index& index, const Layout& layout, O
         flush();
         nb.build(grid, index, stencil,
                  grid.coords_of(layout.cell_x[first], layout.cell_y[first], layout.cell_z[first]));
+        prefetch_rows_ahead();
         bool built = true;  // reported with the cell's first home
         for (std::uint32_t s = slots.begin; s < slots.end; ++s) {
           const std::uint32_t h = layout.particle_at(s);
