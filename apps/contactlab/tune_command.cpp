@@ -28,7 +28,7 @@ struct TuneCommand {
   std::uint64_t tolerance_ = 0;
   bool float_ = false;
   int max_chunk_ = 65536;
-  std::string orders_ = "sorted,morton";
+  std::string orders_ = "sorted";
   std::string grids_ = "auto";
   int search_samples_ = tn::TuneOptions{}.search_samples;
   int exhaustive_rounds_ = tn::TuneOptions{}.exhaustive_rounds;
@@ -56,7 +56,8 @@ void TuneCommand::add_to(CLI::App& sub) {
                "screen the single-precision variants too (exact: near-ties in double)");
   sub.add_option("--tolerance", tolerance_, "wrong contact pairs allowed (implies --float)");
   sub.add_option("--max-chunk", max_chunk_, "largest chunk of the grid 1, 2, 4, ...");
-  sub.add_option("--orders", orders_, "orders to screen, comma-separated");
+  sub.add_option("--orders", orders_,
+                 "orders to screen, comma-separated (sorted, morton, unsorted)");
   sub.add_option("--grids", grids_,
                  "cell indexes to screen, comma-separated: auto (default), dense, hashed");
   sub.add_option("--search-samples", search_samples_, "timed runs per chunk the search evaluates")
