@@ -25,6 +25,9 @@ def load(tuning_dir):
                     need(m, f"$.methods[{i}]", key)
                 number(m, f"$.methods[{i}]", "tuning_cost_s")
                 _check_regrets(m, f"$.methods[{i}]")
+                for j, st in enumerate(m.get("structures", [])):
+                    need(st, f"$.methods[{i}].structures[{j}]", "variant")
+                    _check_regrets(st, f"$.methods[{i}].structures[{j}]")
             for i, c in enumerate(need(t, "$", "classic")):
                 for key in ("name", "inputs", "chunk"):
                     need(c, f"$.classic[{i}]", key)
@@ -64,7 +67,8 @@ def section(documents, out):
         out.append("Not run (no tuning/*.json).")
         return
     out.append("T_c median and regret come from a final verification in which every distinct "
-               "choice (the methods' and the classic formulas') is timed once per round, in a new "
+               "choice (the methods', the classic formulas' and the model's best schedule of each "
+               "structure it priced, rows \"model: structure\") is timed once per round, in a new "
                "random order each round. Regret = median of the per-round ratios to the fastest "
                "verified choice − 1; \"vs exhaustive\" = the same against the exhaustive best "
                "(the issue's target); brackets: 95% intervals of those medians. Cost = seconds the "
@@ -81,6 +85,13 @@ def section(documents, out):
             rows.append([scene, m["method"], f"`{m['variant']}`", median,
                          _relative(m, "regret", "regret_ci95"), _relative(m, "vs_exhaustive", None),
                          f"{m['tuning_cost_s']:.1f}", m.get("timed_runs", "–")])
+        model = next((m for m in methods if m["method"] == "model"), None)
+        for st in (model or {}).get("structures", []):
+            if "measured" not in st:
+                continue
+            rows.append([scene, "model: structure", f"`{st['variant']}`",
+                         f"{st['measured']['median_s']:.4f}", _relative(st, "regret", "regret_ci95"),
+                         "–", "–", "–"])
         for c in t["classic"]:
             median = c.get("measured", {}).get("median_s")
             rows.append([scene, f"classic: {c['name']} ({c['inputs']})", f"`{c.get('variant', c['chunk'])}`",

@@ -156,15 +156,20 @@ TuneReport tune_kernel(MeasuredKernel& kernel, const SceneRecord& scene,
   result.chosen = state.choices.back().second;
   if (options.predict_only) return result;
 
-  // Verification: each method's choice and each classic formula's k timed alike, every
-  // distinct variant once per round in a new random order. Comparisons are paired ratios
-  // within rounds (drift of the machine cancels), and regret is against the fastest verified
-  // choice, not the minimum of the exhaustive sweep's own medians (biased low by noise).
+  // Verification: each method's choice, each classic formula's k and the model's best schedule
+  // of every structure it priced, timed alike, every distinct variant once per round in a new
+  // random order. Comparisons are paired ratios within rounds (drift of the machine cancels),
+  // and regret is against the fastest verified choice, not the minimum of the exhaustive
+  // sweep's own medians (biased low by noise). The structures are there because the methods
+  // choose among them: a structure no method chose could otherwise be faster unseen.
   std::vector<std::pair<std::string, Variant>> contenders = state.choices;
   for (ClassicEntry& c : report.classic) {
     const Variant variant = with_schedule(tuned.variant, state.tuned_kind, c.chunk);
     c.variant = to_string(variant);
     contenders.emplace_back("classic:" + c.name, variant);
+  }
+  for (const PricedStructure& s : state.structures) {
+    contenders.emplace_back("structure:" + to_string(s.model_choice), s.model_choice);
   }
   const Verification verified(kernel, threads, contenders, options.verify_rounds);
   report.verification = VerificationSummary{
@@ -172,6 +177,20 @@ TuneReport tune_kernel(MeasuredKernel& kernel, const SceneRecord& scene,
       to_string(verified.best()), "fastest verified choice; median of per-round paired ratios - 1"};
   for (MethodEntry& entry : report.methods) verified.attach(entry, entry.method);
   for (ClassicEntry& entry : report.classic) verified.attach(entry, "classic:" + entry.name);
+  for (MethodEntry& entry : report.methods) {
+    if (entry.method != "model" || !entry.structures) continue;
+    for (nlohmann::json& row : *entry.structures) {
+      const std::string name = "structure:" + row.at("variant").get<std::string>();
+      if (!verified.has(name)) continue;
+      Verified timing;
+      verified.attach(timing, name);
+      row["measured"] = {{"median_s", timing.measured->median_s},
+                         {"ci95_low_s", timing.measured->ci95_low_s},
+                         {"ci95_high_s", timing.measured->ci95_high_s}};
+      row["regret"] = *timing.regret;
+      row["regret_ci95"] = *timing.regret_ci95;
+    }
+  }
   return result;
 }
 

@@ -2,6 +2,7 @@
 // --threads 0 means the same in tune and detect.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -64,6 +65,20 @@ TEST(TuneCli, ReportsModelSearchExhaustiveWithRegretAndCost) {
     EXPECT_GT(t["methods"][m]["measured"]["median_s"].get<double>(), 0.0);
     EXPECT_GE(t["methods"][m]["tuning_cost_s"].get<double>(), 0.0);
   }
+  // The model's best schedule of every structure it priced is verified too, and the fastest
+  // verified choice is among everything verified: no regret below zero, and one of zero.
+  double smallest_regret = 1e9;
+  for (const auto& s : t["methods"][0]["structures"]) {
+    ASSERT_TRUE(s.contains("regret")) << s.dump();
+    EXPECT_GT(s["measured"]["median_s"].get<double>(), 0.0);
+    EXPECT_GE(s["regret"].get<double>(), 0.0);
+    smallest_regret = std::min(smallest_regret, s["regret"].get<double>());
+  }
+  for (const auto& m : t["methods"])
+    smallest_regret = std::min(smallest_regret, m["regret"].get<double>());
+  for (const auto& c : t["classic"])
+    smallest_regret = std::min(smallest_regret, c["regret"].get<double>());
+  EXPECT_EQ(smallest_regret, 0.0);
   // The search spends fewer timed runs than the exhaustive sweep.
   EXPECT_LT(t["methods"][1]["evaluations"].get<int>() * 3,
             t["methods"][2]["timed_runs"].get<int>());
