@@ -4,8 +4,11 @@
 #include <fmt/core.h>
 #include <omp.h>
 
+#include <algorithm>
 #include <cmath>
 #include <deque>
+#include <random>
+#include <vector>
 
 #include "contactlab/kernels/scene_generate.hpp"
 #include "contactlab/tuner/measured_kernel.hpp"
@@ -23,15 +26,11 @@ constexpr int kCalibrationSamples = 5;
 
 WorkView view_of(const LoopWork& work) { return {work.tests, work.homes, work.builds}; }
 
-// The loop's part of T_c in kCalibrationSamples runs: what the loop constants are fitted to
-// (the rows written after it are the output term's).
-std::vector<double> loop_samples(DetectionKernel& kernel, const Variant& variant, int threads) {
-  std::vector<double> loop;
-  for (int k = 0; k < kCalibrationSamples; ++k) {
-    const KernelRun r = kernel.run(variant, threads);
-    loop.push_back(r.phase_s("detect") - r.phase_s("assembly"));
-  }
-  return loop;
+// The loop's part of T_c in one run: what the loop constants are fitted to (the rows written
+// after it are the output term's).
+double loop_seconds(DetectionKernel& kernel, const Variant& variant, int threads) {
+  const KernelRun r = kernel.run(variant, threads);
+  return r.phase_s("detect") - r.phase_s("assembly");
 }
 
 // The output's entry-weighted degree (as the model estimates it) and the assembly's seconds
@@ -133,21 +132,53 @@ Calibration calibrate_machine(const TuneOptions& options, int threads) {
   calibration.threads = threads;
   std::vector<int> thread_counts{1};
   if (threads > 1) thread_counts.push_back(threads);
-  for (const Variant& structure : structures_of(options)) {
-    std::vector<LoopWork> works;  // kept alive: TimedRun holds views
+  // Every point (structure, schedule, thread count) of a scene is timed once per round, the
+  // rounds in a new seeded order each, scene after scene: a noisy spell of the machine then
+  // falls on all structures alike. Timed one structure after another, a spell had made one
+  // structure's constants 10 - 20 % off against another's, and the model chose between them
+  // wrongly (docs/tuning.md).
+  const std::vector<Variant> structures = structures_of(options);
+  struct Point {
+    std::size_t structure, scene;
+    int threads;
+    Schedule schedule;
+    std::vector<double> loop_s;
+  };
+  std::vector<Point> points;
+  std::vector<std::vector<LoopWork>> works(structures.size());  // kept alive: TimedRun views
+  for (std::size_t st = 0; st < structures.size(); ++st) {
     for (std::size_t s = 0; s < scenes.size(); ++s) {
-      works.push_back(kernels[s].iteration_work(structure, 1));
-    }
-    std::vector<TimedRun> runs;
-    for (std::size_t s = 0; s < scenes.size(); ++s) {
+      works[st].push_back(kernels[s].iteration_work(structures[st], 1));
       for (const int t : thread_counts) {
-        for (const Schedule& schedule : scenes[s].schedules) {
-          Variant v = structure;
-          v.schedule = schedule;
-          kernels[s].run(v, t);  // warm-up
-          runs.push_back({view_of(works[s]), t, schedule, median(loop_samples(kernels[s], v, t))});
-        }
+        for (const Schedule& schedule : scenes[s].schedules)
+          points.push_back({st, s, t, schedule, {}});
       }
+    }
+  }
+  auto variant_of = [&](const Point& p) {
+    Variant v = structures[p.structure];
+    v.schedule = p.schedule;
+    return v;
+  };
+  std::mt19937_64 random(20261203);
+  for (std::size_t s = 0; s < scenes.size(); ++s) {
+    std::vector<Point*> order;
+    for (Point& p : points) {
+      if (p.scene == s) order.push_back(&p);
+    }
+    for (Point* p : order) kernels[s].run(variant_of(*p), p->threads);  // warm-up
+    for (int round = 0; round < kCalibrationSamples; ++round) {
+      std::shuffle(order.begin(), order.end(), random);
+      for (Point* p : order)
+        p->loop_s.push_back(loop_seconds(kernels[s], variant_of(*p), p->threads));
+    }
+  }
+  for (std::size_t st = 0; st < structures.size(); ++st) {
+    const Variant& structure = structures[st];
+    std::vector<TimedRun> runs;
+    for (const Point& p : points) {
+      if (p.structure != st) continue;
+      runs.push_back({view_of(works[st][p.scene]), p.threads, p.schedule, median(p.loop_s)});
     }
     const CalibrationResult fit = calibrate_costs(runs);
     std::vector<OutputCost> output;
