@@ -75,8 +75,9 @@ struct Calibration {
 std::string structure_key(const Variant& variant);
 
 // Times a small fixed set of runs of every structure of `options` on this machine (clustered
-// scenes of N = 40,000 and 120,000, D = 1/100, and a sparse uniform one; static, static,k,
-// dynamic,k, guided,k at 1 and `threads` threads) and fits each structure's loop costs to the
+// scenes of N = 40,000 and 120,000, D = 1/100, sparse and dense uniform ones and a nearly empty
+// grid; static, static,k, dynamic,k, guided,k at 1 and `threads` threads; every point of a scene
+// once per round, in a new seeded order each round) and fits each structure's loop costs to the
 // loop's time; its output costs (output_cost.hpp) from the assembly's time per entry on the
 // 120,000-particle scene and on a dense uniform one whose rows exceed the caches (docs/tuning.md).
 Calibration calibrate_machine(const TuneOptions& options, int threads);
