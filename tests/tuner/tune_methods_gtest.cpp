@@ -54,6 +54,10 @@ Calibration flat_costs() {
   return calibration;
 }
 
+std::pair<const MethodEntry*, const MethodEntry*> model_and_search(const TuneReport& report) {
+  return {report.document.method("model"), report.document.method("search")};
+}
+
 TEST(SearchMethod, ReachesTheModelsBlockScheduleOffTheChunkGrid) {
   // The block (static without a chunk size: thread 0 writes its rows in place) runs 20 % faster
   // than any chunk of the grid; the chunk search alone cannot reach it.
@@ -63,11 +67,9 @@ TEST(SearchMethod, ReachesTheModelsBlockScheduleOffTheChunkGrid) {
   });
   const TuneReport report =
       tune_kernel(kernel, SceneRecord{}, 0.01, one_structure(), flat_costs(), "test");
-  const MethodEntry* model = report.document.method("model");
-  const MethodEntry* search = report.document.method("search");
-  ASSERT_NE(model, nullptr);
-  ASSERT_NE(search, nullptr);
-  ASSERT_EQ(model->variant, "particle/sorted/full/static");  // the precondition
+  const auto [model, search] = model_and_search(report);
+  ASSERT_TRUE(model && search);
+  ASSERT_EQ(model->variant, "particle/sorted/full/static");  // so the search weighs the block
   EXPECT_EQ(search->variant, "particle/sorted/full/static");
   EXPECT_EQ(to_string(report.chosen), "particle/sorted/full/static");
   EXPECT_DOUBLE_EQ(*search->regret, 0.0);
@@ -80,11 +82,9 @@ TEST(SearchMethod, KeepsAFasterChunkOverTheBlock) {
   });
   const TuneReport report =
       tune_kernel(kernel, SceneRecord{}, 0.01, one_structure(), flat_costs(), "test");
-  const MethodEntry* model = report.document.method("model");
-  const MethodEntry* search = report.document.method("search");
-  ASSERT_NE(model, nullptr);
-  ASSERT_NE(search, nullptr);
-  ASSERT_EQ(model->variant, "particle/sorted/full/static");  // so the block is weighed
+  const auto [model, search] = model_and_search(report);
+  ASSERT_TRUE(model && search);
+  ASSERT_EQ(model->variant, "particle/sorted/full/static");  // so the search weighs the block
   EXPECT_NE(search->chunk, 0) << search->variant;
 }
 
