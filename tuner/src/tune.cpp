@@ -175,20 +175,14 @@ TuneReport tune_kernel(MeasuredKernel& kernel, const SceneRecord& scene,
   report.verification = VerificationSummary{
       options.verify_rounds, static_cast<int>(verified.distinct_count()),
       to_string(verified.best()), "fastest verified choice; median of per-round paired ratios - 1"};
-  for (MethodEntry& entry : report.methods) verified.attach(entry, entry.method);
   for (ClassicEntry& entry : report.classic) verified.attach(entry, "classic:" + entry.name);
   for (MethodEntry& entry : report.methods) {
+    verified.attach(entry, entry.method);
     if (entry.method != "model" || !entry.structures) continue;
-    for (nlohmann::json& row : *entry.structures) {
-      const std::string name = "structure:" + row.at("variant").get<std::string>();
-      if (!verified.has(name)) continue;
+    for (nlohmann::json& row : *entry.structures) {  // each structure's verified timing
       Verified timing;
-      verified.attach(timing, name);
-      row["measured"] = {{"median_s", timing.measured->median_s},
-                         {"ci95_low_s", timing.measured->ci95_low_s},
-                         {"ci95_high_s", timing.measured->ci95_high_s}};
-      row["regret"] = *timing.regret;
-      row["regret_ci95"] = *timing.regret_ci95;
+      verified.attach(timing, "structure:" + row.at("variant").get<std::string>());
+      row.update(to_json_value(timing));
     }
   }
   return result;

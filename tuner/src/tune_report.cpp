@@ -35,6 +35,12 @@ constexpr auto verified_fields() {
 }
 
 template <>
+struct FieldTable<Verified> {
+  using T = Verified;
+  static constexpr auto kFields = verified_fields<Verified>();
+};
+
+template <>
 struct FieldTable<MethodEntry> {
   using T = MethodEntry;
   static constexpr auto kFields = std::tuple_cat(
@@ -135,6 +141,8 @@ const MethodEntry* TuneDocument::method(const std::string& name) const {
   }
   return nullptr;
 }
+
+nlohmann::json to_json_value(const Verified& verified) { return to_json_value<Verified>(verified); }
 
 nlohmann::json to_json_value(const TuneDocument& document) {
   return to_json_value<TuneDocument>(document);

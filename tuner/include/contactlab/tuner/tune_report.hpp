@@ -116,6 +116,9 @@ struct TuneDocument {
 };
 
 nlohmann::json to_json_value(const TuneDocument& document);
+// An entry's verification fields alone (as in a method's entry), for rows kept as JSON (the
+// model's structures).
+nlohmann::json to_json_value(const Verified& verified);
 void read(const JsonIn& in, TuneDocument& out);
 // Throws InputError naming the file and the JSON path.
 TuneDocument read_tune_document(const std::string& path);
