@@ -151,6 +151,42 @@ TEST(ExhaustiveSweep, RoundsVisitEveryChunkOncePerRoundInShuffledOrder) {
   EXPECT_THROW(exhaustive_chunk_sweep(record, options), std::invalid_argument);
 }
 
+// The block (chunk 0: one share per thread) is measured in every round with the grid, as the
+// largest chunk: it wins where it is fastest, and ties with a chunk in its favour.
+TEST(ExhaustiveSweep, MeasuresTheBlockWithTheGridAsTheLargestChunk) {
+  auto sweep = [](double block_seconds) {
+    std::vector<int> visits;
+    MeasureChunk record = [&visits, block_seconds](int chunk) {
+      visits.push_back(chunk);
+      const double t = chunk == 0 ? block_seconds : convex(std::log2(static_cast<double>(chunk)));
+      return std::vector<double>{t, t, t};
+    };
+    ChunkSearchOptions options;
+    options.rounds = 2;
+    options.with_block = true;
+    const ChunkSearchResult all = exhaustive_chunk_sweep(record, options);
+    EXPECT_EQ(std::count(visits.begin(), visits.end(), 0), 2);
+    EXPECT_EQ(visits.size(), 2u * 18u);
+    EXPECT_EQ(all.measured.back().chunk, 0);
+    EXPECT_EQ(all.measured.back().evaluations, 2);
+    return all;
+  };
+  const ChunkSearchResult faster = sweep(0.9e-3);  // 10 % below the grid's best
+  EXPECT_EQ(faster.fastest_chunk, 0);
+  EXPECT_EQ(faster.chosen_chunk, 0);
+  EXPECT_NEAR(regret(faster, 256), 1.0 / 0.9 - 1.0, 1e-12);
+  const ChunkSearchResult slower = sweep(2e-3);
+  EXPECT_EQ(slower.fastest_chunk, 256);
+  EXPECT_EQ(slower.chosen_chunk, 256);
+  const ChunkSearchResult tied = sweep(1e-3);  // equal to k = 256: the larger chunk wins
+  EXPECT_EQ(tied.fastest_chunk, 0);
+
+  ChunkSearchOptions options;
+  options.with_block = true;
+  SyntheticLoop loop{convex};
+  EXPECT_THROW(search_chunk(loop.measure(), options), std::invalid_argument);
+}
+
 TEST(SearchChunk, ConfirmationRoundsAddSamplesToTheContenders) {
   SyntheticLoop loop{plateau};
   ChunkSearchOptions options;

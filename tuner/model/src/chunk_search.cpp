@@ -57,7 +57,8 @@ class GridSearch {
         budgeted_(budgeted),
         function_(function),
         entries_(options.grid.size()) {
-    for (std::size_t i = 0; i < entries_.size(); ++i) entries_[i].chunk = options.grid[i];
+    for (std::size_t i = 0; i < options.grid.size(); ++i) entries_[i].chunk = options.grid[i];
+    if (options.with_block) entries_.push_back(ChunkMeasurement{});  // chunk 0: the largest
   }
 
   std::size_t size() const { return entries_.size(); }
@@ -260,6 +261,11 @@ const ChunkMeasurement& ChunkSearchResult::at(int chunk) const {
 }
 
 ChunkSearchResult search_chunk(const MeasureChunk& measure, const ChunkSearchOptions& options) {
+  if (options.with_block) {
+    throw std::invalid_argument(
+        "search_chunk: with_block is for exhaustive_chunk_sweep (the block is off the grid the "
+        "search walks)");
+  }
   validate(options, "search_chunk");
   GridSearch search(measure, options, true, "search_chunk");
   [&] {

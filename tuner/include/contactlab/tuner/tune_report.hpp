@@ -42,6 +42,8 @@ struct Verified {
 // One tuning method's entry. The common fields first; then each method's own, present only
 // for the methods that have them (model: predicted_s, structures; search: screening and the
 // chunk search's costs; exhaustive: largest_equivalent_chunk, rounds; both: chunks_measured).
+// A chunk of 0 is the schedule's default: with `static`, one block per thread (the sweep's last
+// point, the largest chunk).
 struct MethodEntry : Verified {
   std::string method;
   std::string variant;

@@ -42,6 +42,10 @@ struct ChunkSearchOptions {
   // so that the machine's drift spreads over all chunks instead of favouring some.
   int rounds = 1;
   std::uint64_t order_seed = 1;
+  // Exhaustive sweep only: also measure chunk 0, the schedule's one contiguous block per thread
+  // (static without a chunk size), as the largest chunk there is. It is not on the grid, and on
+  // the full stencil it is the only static schedule where thread 0 writes its rows in place.
+  bool with_block = false;
   // After the search, re-measure every chunk whose interval overlaps the fastest one's this
   // many times (more samples, narrower intervals), then re-decide.
   int confirmation_rounds = 0;
@@ -60,7 +64,7 @@ enum class SearchStop { kConverged, kEvaluationBudget, kTimeBudget };
 struct ChunkSearchResult {
   int chosen_chunk = 0;   // the largest chunk equivalent to the fastest (see above)
   int fastest_chunk = 0;  // the smallest median (ties: the larger chunk)
-  std::vector<ChunkMeasurement> measured;  // ascending chunk
+  std::vector<ChunkMeasurement> measured;  // ascending chunk, the block (chunk 0) last
   int evaluations = 0;                     // calls of measure()
   double measuring_seconds = 0.0;          // wall time spent inside measure()
   double sampled_seconds = 0.0;            // sum of all samples returned
