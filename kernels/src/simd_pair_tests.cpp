@@ -76,6 +76,58 @@ namespace contactlab::simd {
 namespace HWY_NAMESPACE {
 namespace hn = hwy::HWY_NAMESPACE;
 
+// The float test's second test: the candidates of a float vector at slots s.. (the first
+// `count` lanes) against home h in double, operation for operation the test of pair_test.hpp
+// (differences, squares, their sum left to right, `<=`; no fused multiply-add), as two vectors of
+// half as many double lanes. The exact hits of every lane: where the float test was sure it
+// agrees with them (FloatBand). Lane by lane, the scalar second test had taken about 14 % of
+// the float blocks' time on the paper's scene, where one vector of sixteen candidates in 230
+// holds a pair within the band.
+// The lanes of `valid` (the first ones) loaded from p, the others zero. Highway 1.0's MaskedLoad
+// below AVX2 is an aligned load of the whole vector (and a blend): at a range's unaligned last
+// vector it faults wherever GCC does not fold it into the next instruction. There the whole
+// vector is read unaligned, as that MaskedLoad reads it; AVX2 and AVX-512 load only the lanes.
+template <class D, class T>
+HWY_INLINE hn::Vec<D> LoadFirst(D d, hn::Mask<D> valid, const T* HWY_RESTRICT p) {
+#if HWY_TARGET <= HWY_AVX2
+  return hn::MaskedLoad(valid, d, p);
+#else
+  return hn::IfThenElseZero(valid, hn::LoadU(d, p));
+#endif
+}
+
+template <bool kDiameters, class DF>
+HWY_INLINE hn::Mask<DF> ExactHits(DF df, const ExactCoordinates& exact, std::uint32_t h,
+                                  std::uint32_t s, std::size_t count) {
+  const hn::Repartition<double, DF> dd;
+  const std::size_t half = hn::Lanes(dd);
+  const auto hx = hn::Set(dd, exact.x[h]), hy = hn::Set(dd, exact.y[h]),
+             hz = hn::Set(dd, exact.z[h]);
+  std::uint32_t bits = 0;
+  for (std::size_t part = 0; part < 2 && part * half < count; ++part) {
+    const std::size_t first = s + part * half;
+    const std::size_t here = std::min(half, count - part * half);
+    const auto valid = hn::FirstN(dd, here);
+    const auto dx = hn::Sub(hx, LoadFirst(dd, valid, exact.x + first));
+    const auto dy = hn::Sub(hy, LoadFirst(dd, valid, exact.y + first));
+    const auto dz = hn::Sub(hz, LoadFirst(dd, valid, exact.z + first));
+    const auto dist_sq = hn::Add(hn::Add(hn::Mul(dx, dx), hn::Mul(dy, dy)), hn::Mul(dz, dz));
+    hn::Mask<decltype(dd)> hit;
+    if constexpr (kDiameters) {
+      const auto sum = hn::Add(hn::Set(dd, exact.d[h]), LoadFirst(dd, valid, exact.d + first));
+      hit = hn::Le(hn::Mul(hn::Set(dd, 4.0), dist_sq), hn::Mul(sum, sum));
+    } else {
+      hit = hn::Le(dist_sq, hn::Set(dd, exact.reach_sq));
+    }
+    std::uint8_t part_bits[8] = {};
+    hn::StoreMaskBits(dd, hn::And(hit, valid), part_bits);
+    bits |= std::uint32_t{part_bits[0]} << (part * half);  // at most 8 double lanes a vector
+  }
+  std::uint8_t lane_bits[8] = {static_cast<std::uint8_t>(bits),
+                               static_cast<std::uint8_t>(bits >> 8)};
+  return hn::LoadMaskBits(df, lane_bits);
+}
+
 template <int kHomes, bool kDiameters, class Real>
 void AppendBlock(const BlockTask<Real>& task) {
   const hn::ScalableTag<Real> d;
@@ -151,21 +203,10 @@ void AppendBlock(const BlockTask<Real>& task) {
         maybe = hn::And(maybe, partner);
       }
       const auto unsure = hn::AndNot(hit, maybe);
-      if (!hn::AllFalse(d, unsure)) [[unlikely]] {  // lane by lane, the unsure ones in double
-        std::uint8_t hit_bits[HWY_MAX_BYTES / 4 + 8] = {}, unsure_bits[HWY_MAX_BYTES / 4 + 8] = {};
-        hn::StoreMaskBits(d, hit, hit_bits);
-        hn::StoreMaskBits(d, unsure, unsure_bits);
-        const std::uint32_t count =
-            std::min<std::uint32_t>(static_cast<std::uint32_t>(lanes), end - s);
-        for (std::uint32_t l = 0; l < count; ++l) {
-          bool lane_hit = (hit_bits[l / 8] >> (l % 8)) & 1;
-          if ((unsure_bits[l / 8] >> (l % 8)) & 1) {
-            lane_hit = task.exact->in_contact(home.slot, s + l, kDiameters);
-          }
-          *home.out = s + l;
-          home.out += lane_hit;
-        }
-        return;
+      if (!hn::AllFalse(d, unsure)) [[unlikely]] {  // the whole vector again, in double
+        const std::size_t count = std::min<std::size_t>(lanes, end - s);
+        hit = ExactHits<kDiameters>(d, *task.exact, home.slot, s, count);
+        if constexpr (kOwnRow) hit = hn::And(hit, hn::RebindMask(d, partner_slots()));
       }
     } else if constexpr (kDiameters) {
       const auto sum = hn::Add(home.d, cd);
@@ -225,7 +266,7 @@ void AppendBlock(const BlockTask<Real>& task) {
         if constexpr (kWhole) {
           return hn::LoadU(d, p + s);
         } else {  // AVX2 keeps a masked load a masked load even under an all-true mask
-          return hn::MaskedLoad(valid, d, p + s);
+          return LoadFirst(d, valid, p + s);
         }
       };
       const V cx = load(px), cy = load(py), cz = load(pz);
