@@ -76,13 +76,6 @@ namespace contactlab::simd {
 namespace HWY_NAMESPACE {
 namespace hn = hwy::HWY_NAMESPACE;
 
-// The float test's second test: the candidates of a float vector at slots s.. (the first
-// `count` lanes) against home h in double, operation for operation the test of pair_test.hpp
-// (differences, squares, their sum left to right, `<=`; no fused multiply-add), as two vectors of
-// half as many double lanes. The exact hits of every lane: where the float test was sure it
-// agrees with them (FloatBand). Lane by lane, the scalar second test had taken about 14 % of
-// the float blocks' time on the paper's scene, where one vector of sixteen candidates in 230
-// holds a pair within the band.
 // The lanes of `valid` (the first ones) loaded from p, the others zero. Highway 1.0's MaskedLoad
 // below AVX2 is an aligned load of the whole vector (and a blend): at a range's unaligned last
 // vector it faults wherever GCC does not fold it into the next instruction. There the whole
@@ -96,6 +89,12 @@ HWY_INLINE hn::Vec<D> LoadFirst(D d, hn::Mask<D> valid, const T* HWY_RESTRICT p)
 #endif
 }
 
+// The float test's second test: the candidates of a float vector at slots s.. (the first
+// `count` lanes) against home h in double, operation for operation the test of pair_test.hpp
+// (differences, squares, their sum left to right, `<=`; no fused multiply-add), as two vectors of
+// half as many double lanes. The exact hits of every lane: where the float test was sure, they
+// agree with it (FloatBand). On the paper's scene about one vector of sixteen candidates in 230
+// holds a pair within the band; it was tested lane by lane before (docs/architecture.md).
 template <bool kDiameters, class DF>
 HWY_INLINE hn::Mask<DF> ExactHits(DF df, const ExactCoordinates& exact, std::uint32_t h,
                                   std::uint32_t s, std::size_t count) {
