@@ -89,44 +89,6 @@ HWY_INLINE hn::Vec<D> LoadFirst(D d, hn::Mask<D> valid, const T* HWY_RESTRICT p)
 #endif
 }
 
-// The float test's second test: the candidates of a float vector at slots s.. (the first
-// `count` lanes) against home h in double, operation for operation the test of pair_test.hpp
-// (differences, squares, their sum left to right, `<=`; no fused multiply-add), as two vectors of
-// half as many double lanes. The exact hits of every lane: where the float test was sure, they
-// agree with it (FloatBand). On the paper's scene about one vector of sixteen candidates in 230
-// holds a pair within the band; it was tested lane by lane before (docs/architecture.md).
-template <bool kDiameters, class DF>
-HWY_INLINE hn::Mask<DF> ExactHits(DF df, const ExactCoordinates& exact, std::uint32_t h,
-                                  std::uint32_t s, std::size_t count) {
-  const hn::Repartition<double, DF> dd;
-  const std::size_t half = hn::Lanes(dd);
-  const auto hx = hn::Set(dd, exact.x[h]), hy = hn::Set(dd, exact.y[h]),
-             hz = hn::Set(dd, exact.z[h]);
-  std::uint32_t bits = 0;
-  for (std::size_t part = 0; part < 2 && part * half < count; ++part) {
-    const std::size_t first = s + part * half;
-    const std::size_t here = std::min(half, count - part * half);
-    const auto valid = hn::FirstN(dd, here);
-    const auto dx = hn::Sub(hx, LoadFirst(dd, valid, exact.x + first));
-    const auto dy = hn::Sub(hy, LoadFirst(dd, valid, exact.y + first));
-    const auto dz = hn::Sub(hz, LoadFirst(dd, valid, exact.z + first));
-    const auto dist_sq = hn::Add(hn::Add(hn::Mul(dx, dx), hn::Mul(dy, dy)), hn::Mul(dz, dz));
-    hn::Mask<decltype(dd)> hit;
-    if constexpr (kDiameters) {
-      const auto sum = hn::Add(hn::Set(dd, exact.d[h]), LoadFirst(dd, valid, exact.d + first));
-      hit = hn::Le(hn::Mul(hn::Set(dd, 4.0), dist_sq), hn::Mul(sum, sum));
-    } else {
-      hit = hn::Le(dist_sq, hn::Set(dd, exact.reach_sq));
-    }
-    std::uint8_t part_bits[8] = {};
-    hn::StoreMaskBits(dd, hn::And(hit, valid), part_bits);
-    bits |= std::uint32_t{part_bits[0]} << (part * half);  // at most 8 double lanes a vector
-  }
-  std::uint8_t lane_bits[8] = {static_cast<std::uint8_t>(bits),
-                               static_cast<std::uint8_t>(bits >> 8)};
-  return hn::LoadMaskBits(df, lane_bits);
-}
-
 template <int kHomes, bool kDiameters, class Real>
 void AppendBlock(const BlockTask<Real>& task) {
   const hn::ScalableTag<Real> d;
@@ -202,10 +164,21 @@ void AppendBlock(const BlockTask<Real>& task) {
         maybe = hn::And(maybe, partner);
       }
       const auto unsure = hn::AndNot(hit, maybe);
-      if (!hn::AllFalse(d, unsure)) [[unlikely]] {  // the whole vector again, in double
-        const std::size_t count = std::min<std::size_t>(lanes, end - s);
-        hit = ExactHits<kDiameters>(d, *task.exact, home.slot, s, count);
-        if constexpr (kOwnRow) hit = hn::And(hit, hn::RebindMask(d, partner_slots()));
+      if (!hn::AllFalse(d, unsure)) [[unlikely]] {  // lane by lane, the unsure ones in double
+        std::uint8_t hit_bits[HWY_MAX_BYTES / 4 + 8] = {}, unsure_bits[HWY_MAX_BYTES / 4 + 8] = {};
+        hn::StoreMaskBits(d, hit, hit_bits);
+        hn::StoreMaskBits(d, unsure, unsure_bits);
+        const std::uint32_t count =
+            std::min<std::uint32_t>(static_cast<std::uint32_t>(lanes), end - s);
+        for (std::uint32_t l = 0; l < count; ++l) {
+          bool lane_hit = (hit_bits[l / 8] >> (l % 8)) & 1;
+          if ((unsure_bits[l / 8] >> (l % 8)) & 1) {
+            lane_hit = task.exact->in_contact(home.slot, s + l, kDiameters);
+          }
+          *home.out = s + l;
+          home.out += lane_hit;
+        }
+        return;
       }
     } else if constexpr (kDiameters) {
       const auto sum = hn::Add(home.d, cd);
