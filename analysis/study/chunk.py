@@ -1,11 +1,14 @@
 """The paper's open problem, the block-cyclic chunk size: T_c against k at 2 threads with 95 %
-intervals (a difference is claimed only where intervals do not overlap), the emulated best
-chunk at more threads against the tuner's predictions, and the headline answer."""
+intervals, the emulated best chunk at more threads against the tuner's predictions, and the
+headline answer. A difference is claimed only where the sweep shows one: with a sweep in rounds,
+where the median of the per-round ratios has a 95 % interval clear of 1 (a slow spell of the
+machine slows both sides of a round's ratio); without rounds, where the two medians' intervals
+do not overlap."""
 from types import SimpleNamespace
 
 from . import tuning
-from .common import (cell, context_line, emulated, load_results, num, ok_runs, plt, predicted,
-                     ratio_interval, reading, save_figure, summary, table)
+from .common import (cell, context_line, emulated, load_results, num, ok_runs, paired_ratio, plt,
+                     predicted, ratio_interval, reading, round_medians, save_figure, summary, table)
 
 
 def collect(path):
@@ -13,12 +16,13 @@ def collect(path):
     if path is None:
         return None
     document = load_results(path)
-    series, block, threads, scene, by_variant = {}, None, set(), None, {}
+    series, block, threads, scene, by_variant, rounds = {}, None, set(), None, {}, {}
     with reading(path):
         for run_path, run in ok_runs(document):
             variant = run["parameters"]["variant"]
             value = summary(run, run_path, "detect_s")
             by_variant[variant] = value
+            rounds[variant] = round_medians(run, run_path, "detect_s")
             threads.add(run["parameters"]["threads"])
             scene = scene or run["parameters"].get("scene")
             schedule = variant.split("/")[-1]
@@ -29,8 +33,31 @@ def collect(path):
             series.setdefault(kind, []).append((int(k), value))
     for points in series.values():
         points.sort()
+    paired = bool(rounds) and all(r is not None for r in rounds.values())
+    round_count = len(set().union(*(r.keys() for r in rounds.values()))) if paired else 0
     return SimpleNamespace(series=series, block=block, threads=sorted(threads), scene=scene or {},
-                           by_variant=by_variant, context=context_line(document))
+                           by_variant=by_variant, rounds=rounds if paired else {},
+                           round_count=round_count, context=context_line(document))
+
+
+def _variant_of(study, value):
+    return next(v for v, x in study.by_variant.items() if x is value)
+
+
+def _compare(study, value, reference):
+    """value's T_c over reference's: (ratio Interval, whether it is a real difference, how it
+    was measured)."""
+    if study.rounds:
+        r = paired_ratio(study.rounds[_variant_of(study, value)],
+                         study.rounds[_variant_of(study, reference)])
+        if r is not None:
+            return r, r.low > 1.0 or r.high < 1.0, f"median of {study.round_count} rounds' ratios"
+    r = ratio_interval(value, reference)
+    return r, not value.overlaps(reference), "independent medians"
+
+
+def _percent(r):
+    return f"{100 * (r.median - 1):+.1f}% [{100 * (r.low - 1):+.1f}, {100 * (r.high - 1):+.1f}]"
 
 
 def _best(points):
@@ -43,10 +70,14 @@ def section(study, emulation, tunings, figures_dir, out):
         out.append("Not run (no chunk-study.json).")
     else:
         threads = ", ".join(str(t) for t in study.threads)
+        rule = (f"the sweep ran in {study.round_count} rounds (every point once a round, in a "
+                "new order each): **a difference is claimed only when the median of the rounds' "
+                "ratios has a 95 % interval clear of 1.**" if study.rounds else
+                "**A difference between two k is claimed only when their intervals do not "
+                "overlap.**")
         out.append(f"Ours: {study.context}; {threads} threads, `particle/sorted/full`, scene "
                    f"{study.scene.get('kind', '?')} N = {study.scene.get('n', '?')}. T_c median "
-                   "[95 % interval]. **A difference between two k is claimed only when their "
-                   "intervals do not overlap.**\n")
+                   f"[95 % interval]; {rule}\n")
         out.extend(_real_differences(study))
         out.append(f"\n![chunk study]({_figure(study, figures_dir)})")
     tuning.section(tunings, out)
@@ -59,11 +90,14 @@ def _real_differences(study):
     for kind, points in sorted(study.series.items()):
         k_best, best = _best(points)
         bests[kind] = (k_best, best)
-        slower = [k for k, v in points if not v.overlaps(best)]
-        tied = [k for k, v in points if v.overlaps(best)]
+        real = {k: _compare(study, v, best)[1] for k, v in points if v is not best}
+        slower = [k for k, _ in points if real.get(k)]
+        tied = [k for k, _ in points if not real.get(k)]
+        same, differ = (("ratio's interval holds 1", "ratio's interval above 1") if study.rounds
+                        else ("intervals overlap", "no overlap"))
         lines.append(f"- `{kind},k`: fastest median at k = {k_best}, T_c {cell(best)} s. "
-                     f"Indistinguishable from it (intervals overlap): k = {', '.join(map(str, tied))}. "
-                     + (f"Really slower (no overlap): k = {', '.join(map(str, slower))}."
+                     f"Indistinguishable from it ({same}): k = {', '.join(map(str, tied))}. "
+                     + (f"Really slower ({differ}): k = {', '.join(map(str, slower))}."
                         if slower else "No k is really slower: the sweep cannot tell the chunk sizes apart."))
     if study.block:
         lines.append(f"- `static` (block): T_c {cell(study.block)} s.")
@@ -75,8 +109,13 @@ def _real_differences(study):
             if v is fastest:
                 continue
             other_label = f"`{other},{k2}`" if k2 else f"`{other}`"
-            verdict = ("a real difference (intervals do not overlap)" if not v.overlaps(fastest)
-                       else "not a real difference (intervals overlap)")
+            r, real, how = _compare(study, v, fastest)
+            if study.rounds:
+                verdict = (f"{other_label} {_percent(r)} ({how}): "
+                           + ("a real difference" if real else "not a real difference"))
+            else:
+                verdict = ("a real difference (intervals do not overlap)" if real
+                           else "not a real difference (intervals overlap)")
             lines.append(f"- {label} against the best of {other_label}: "
                          f"{num(fastest.median)} vs {num(v.median)} s, {verdict}.")
     return lines
@@ -157,9 +196,9 @@ def headline(study, tunings):
                      f"[95 %: {100 * low:+.1f}, {100 * high:+.1f}]")
         swept = study.by_variant.get(m["variant"])
         if swept:
-            r = ratio_interval(swept, best)
-            text += (f"; in the sweep its T_c is {cell(swept)} s, {100 * (r.median - 1):+.1f}% "
-                     f"[{100 * (r.low - 1):+.1f}, {100 * (r.high - 1):+.1f}] against the swept best")
+            r, _, how = _compare(study, swept, best)
+            text += (f"; in the sweep its T_c is {cell(swept)} s, {_percent(r)} against the swept "
+                     f"best ({how})")
         else:
             text += "; its choice is not among the swept variants (the sweep is `particle/sorted/full` only)"
         lines.append(text + ".")

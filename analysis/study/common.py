@@ -3,6 +3,7 @@ file and the JSON path), the summaries and intervals they hold, the cell formats
 emulated and predicted values, and atomic writes."""
 import contextlib
 import json
+import math
 import os
 from dataclasses import dataclass
 
@@ -151,6 +152,53 @@ def ratio_interval(numerator, denominator):
     [num.low / den.high, num.high / den.low] (it holds both medians' 95 % intervals at once)."""
     return Interval(numerator.median / denominator.median, numerator.low / denominator.high,
                     numerator.high / denominator.low, numerator.reached and denominator.reached)
+
+
+def median_interval(values, level=0.95):
+    """The median and its distribution-free interval (order statistics of a binomial(n, 1/2)),
+    as tuner_model/statistics.cpp computes it; reached is False where n is too small for the
+    level (the interval is then [min, max])."""
+    xs = sorted(values)
+    n = len(xs)
+    if n == 0:
+        raise ValueError("median of no values")
+    mid = n // 2
+    med = xs[mid] if n % 2 else 0.5 * (xs[mid - 1] + xs[mid])
+    pmf = [math.comb(n, i) / 2.0 ** n for i in range(n + 1)]
+    k, below = 1, pmf[0]
+    coverage = max(0.0, 1.0 - 2.0 * below)
+    while 2 * (k + 1) <= n + 1:
+        next_below = below + pmf[k]
+        next_coverage = max(0.0, 1.0 - 2.0 * next_below)
+        if next_coverage < level:
+            break
+        k, below, coverage = k + 1, next_below, next_coverage
+    return Interval(med, xs[k - 1], xs[n - k], coverage >= level)
+
+
+def round_medians(run, path, field):
+    """{round: median of samples.<field> in that round} of a run a sweep measured in rounds
+    (samples.round), or None when its samples carry no rounds."""
+    rounds = need(run, path, "samples").get("round")
+    if rounds is None:
+        return None
+    values = need(run, path, "samples", field)
+    if len(rounds) != len(values):
+        raise SchemaError(f"{path}.samples.round: {len(rounds)} entries for {len(values)} samples")
+    by_round = {}
+    for r, v in zip(rounds, values):
+        by_round.setdefault(r, []).append(v)
+    return {r: median_interval(v).median for r, v in by_round.items()}
+
+
+def paired_ratio(numerator, denominator):
+    """The median of the per-round ratios of two runs' round medians (round_medians), over the
+    rounds both hold, with its 95 % interval: a slow spell of the machine slows both sides of a
+    round's ratio. None when they share no round."""
+    common = sorted(set(numerator) & set(denominator))
+    if not common:
+        return None
+    return median_interval([numerator[r] / denominator[r] for r in common])
 
 
 def ok_runs(document):

@@ -17,9 +17,11 @@ struct SweepCommand {
   int run() const {
     const tuner::Experiment experiment = tuner::read_experiment(config_);
     const tuner::SweepSummary summary = tuner::run_sweep(experiment, options_);
-    fmt::print("{}: {} points, {} already done, {} ok, {} invalid, {} failed, {:.1f} s -> {}\n",
-               experiment.name, summary.points, summary.skipped, summary.ok, summary.invalid,
-               summary.failed, summary.seconds, options_.out);
+    fmt::print("{}: {} points{}, {} already done, {} ok, {} invalid, {} failed, {:.1f} s -> {}\n",
+               experiment.name, summary.points,
+               experiment.rounds > 1 ? fmt::format(" x {} rounds", experiment.rounds) : "",
+               summary.skipped, summary.ok, summary.invalid, summary.failed, summary.seconds,
+               options_.out);
     return summary.failed || summary.invalid ? 1 : 0;
   }
 };

@@ -86,6 +86,14 @@ TEST(Experiment, RejectsBadFieldsWithTheirPath) {
        },
        "$.repetitions.min: must be in"},
       {[](json& d) {
+         d["repetitions"] = {{"min", 3}, {"target_ci", 0.02}, {"rounds", 4}};
+       },
+       "$.repetitions.rounds: rounds > 1 times a fixed count per visit"},
+      {[](json& d) {
+         d["repetitions"] = {{"rounds", 0}};
+       },
+       "$.repetitions.rounds: must be in"},
+      {[](json& d) {
          d["measurements"] = {{"cache_sim", "l3"}};
        },
        "$.measurements.cache_sim: expected"},
@@ -139,6 +147,28 @@ TEST(Experiment, PointsAreEveryCombinationInASeededInterleavedOrder) {
   for (std::size_t i = 1; i < points.size(); ++i)
     scene_changes += points[i].scene != points[i - 1].scene;
   EXPECT_GT(scene_changes, 3u);
+  // Each round its own order of the same points; round 0 is the seed's order.
+  const auto round0 = experiment_points(e, 0);
+  const auto round1 = experiment_points(e, 1);
+  std::set<std::string> keys1;
+  bool round_differs = false;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    EXPECT_EQ(round0[i].key(), points[i].key());
+    keys1.insert(round1[i].key());
+    round_differs |= round1[i].key() != points[i].key();
+  }
+  EXPECT_EQ(keys1, keys);
+  EXPECT_TRUE(round_differs);
+}
+
+TEST(Experiment, RoundsDefaultToOne) {
+  EXPECT_EQ(parse_experiment(minimal(), "cfg.json").rounds, 1);
+  json d = minimal();
+  d["repetitions"] = {{"min", 2}, {"rounds", 5}};
+  const Experiment e = parse_experiment(d, "cfg.json");
+  EXPECT_EQ(e.rounds, 5);
+  EXPECT_EQ(e.repetitions.repeat, 2);
+  EXPECT_FALSE(e.repetitions.adaptive);
 }
 
 }  // namespace

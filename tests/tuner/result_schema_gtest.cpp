@@ -186,6 +186,38 @@ TEST(ResultSchema, RejectsInconsistentRecords) {
             std::string::npos);
 }
 
+// A sweep's later round adds its samples to the point's record, tagged with the round; the tags
+// are written only where there are rounds, and must match the samples.
+TEST(ResultSchema, VisitsOfLaterRoundsJoinTheRecordWithTheirRound) {
+  const ResultFile file = sample_result();
+  EXPECT_FALSE(json(file)["runs"][0]["samples"].contains("round"));
+  RunRecord record = file.runs[0];
+  add_visit(record, file.runs[0], 2);
+  ASSERT_TRUE(record.samples.round);
+  EXPECT_EQ(*record.samples.round, (std::vector<int>{0, 0, 0, 0, 2, 2, 2, 2}));
+  EXPECT_EQ(record.aggregates->repetitions, 8);
+  EXPECT_EQ(record.aggregates->warmup_runs, 2);
+  EXPECT_EQ(record.status, RunStatus::kOk);
+  EXPECT_EQ(record.phases.at("detect").median, record.aggregates->detect_s.median);
+  ResultFile with_rounds = file;
+  with_rounds.runs[0] = record;
+  const json j = with_rounds;
+  EXPECT_EQ(j["runs"][0]["samples"]["round"].size(), 8u);
+  EXPECT_EQ(json(parse_result(j)), j);
+  json bad = j;
+  bad["runs"][0]["samples"]["round"].erase(0);
+  EXPECT_NE(rejection(bad).find("$.runs[0].samples: "), std::string::npos);
+  bad = j;
+  bad["runs"][0]["samples"]["round"][0] = -1;
+  EXPECT_EQ(rejection(bad), "$.runs[0].samples: round: rounds are numbered from 0");
+  // Another contact count in a later round makes the record invalid.
+  RunRecord other = file.runs[0];
+  other.work->contact_pairs += 1;
+  add_visit(record, other, 3);
+  EXPECT_EQ(record.status, RunStatus::kInvalid);
+  EXPECT_NE(record.message.find("contact count differs between rounds"), std::string::npos);
+}
+
 TEST(ResultSchema, FileErrorsNameTheFile) {
   test::TempDir dir;
   const std::string path = dir.file("broken.json");

@@ -140,7 +140,7 @@ std::string ExperimentPoint::key() const {
   return std::to_string(scene) + "|" + to_string(variant) + "|" + std::to_string(threads);
 }
 
-std::vector<ExperimentPoint> experiment_points(const Experiment& experiment) {
+std::vector<ExperimentPoint> experiment_points(const Experiment& experiment, int round) {
   std::vector<ExperimentPoint> points;
   const std::vector<Variant> variants = experiment.variants();
   for (std::size_t s = 0; s < experiment.scenes.size(); ++s) {
@@ -149,7 +149,7 @@ std::vector<ExperimentPoint> experiment_points(const Experiment& experiment) {
     }
   }
   // Fisher-Yates with the project's portable generator: the order is the same everywhere.
-  Xoshiro256 rng(experiment.order_seed);
+  Xoshiro256 rng(experiment.order_seed + static_cast<std::uint64_t>(round));
   for (std::size_t i = points.size(); i > 1; --i) {
     const std::size_t j = static_cast<std::size_t>((rng.next() >> 11) % i);
     std::swap(points[i - 1], points[j]);
@@ -220,6 +220,11 @@ Experiment parse_experiment_document(const JsonIn& root) {
     reps.adaptive = target > 0.0;
     if (reps.adaptive) reps.target_relative_half_width = target;
     reps.time_budget_s = number<double>(r, "budget_s", reps.time_budget_s, 0.0, 1e6);
+    experiment.rounds = number<int>(r, "rounds", 1, 1, 10000);
+    if (experiment.rounds > 1 && reps.adaptive) {
+      r.field("rounds").fail(
+          "rounds > 1 times a fixed count per visit (\"min\"): drop \"target_ci\" or the rounds");
+    }
     r.finish();
   }
   if (const auto measurements = o.optional_field("measurements")) {

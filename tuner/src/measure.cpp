@@ -4,8 +4,35 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <vector>
+
+#include "contactlab/kernels/error.hpp"
 
 namespace contactlab::tuner {
+namespace {
+
+// The summaries of the samples, and the phases named after them (result_schema.hpp).
+void summarize_samples(RunRecord& record, double level) {
+  const RunSamples& s = record.samples;
+  RunAggregates& a = *record.aggregates;
+  a.setup_s = summarize(s.setup_s, level);
+  a.detect_s = summarize(s.detect_s, level);
+  a.total_s = summarize(s.total_s, level);
+  a.imbalance = summarize(s.imbalance, level);
+  a.thread_busy_median_s.clear();
+  std::size_t threads = 0;
+  for (const auto& rep : s.thread_busy_s) threads = std::max(threads, rep.size());
+  for (std::size_t t = 0; t < threads; ++t) {
+    std::vector<double> busy;
+    for (const auto& rep : s.thread_busy_s) busy.push_back(t < rep.size() ? rep[t] : 0.0);
+    a.thread_busy_median_s.push_back(median(busy));
+  }
+  a.repetitions = static_cast<int>(s.total_s.size());
+  record.phases["setup"] = a.setup_s;
+  record.phases["detect"] = a.detect_s;
+}
+
+}  // namespace
 
 RunRecord measure_detection(ContactDetector& detector, const Scene& scene,
                             const SceneRecord& scene_record, const DetectOptions& options,
@@ -44,28 +71,15 @@ RunRecord measure_detection(ContactDetector& detector, const Scene& scene,
     record.counters.push_back(measure.papi->record());
   }
 
-  RunAggregates a;
-  const double level = measure.repetition.level;
-  a.setup_s = summarize(s.setup_s, level);
-  a.detect_s = summarize(s.detect_s, level);
-  a.total_s = summarize(s.total_s, level);
-  a.imbalance = summarize(s.imbalance, level);
-  const std::size_t threads = last.thread_busy_s.size();
-  for (std::size_t t = 0; t < threads; ++t) {
-    std::vector<double> busy;
-    for (const auto& rep : s.thread_busy_s) busy.push_back(t < rep.size() ? rep[t] : 0.0);
-    a.thread_busy_median_s.push_back(median(busy));
-  }
-  a.repetitions = outcome.repetitions;
+  RunAggregates& a = record.aggregates.emplace();
   a.warmup_runs = outcome.warmup_runs;
   a.stop_reason = outcome.stop;
   a.measurement_s = outcome.elapsed_s;
-  record.aggregates = a;
+  summarize_samples(record, measure.repetition.level);
   record.parameters.threads = last.threads;
   record.work =
       RunWork{last.candidate_tests, last.contact_pairs, last.max_cell_occupancy, last.grid_dims};
   // The same values by name, as every kernel family reports them (result_schema.hpp).
-  record.phases = {{"setup", a.setup_s}, {"detect", a.detect_s}};
   record.work_counts = {{"candidate_tests", last.candidate_tests},
                         {"contact_pairs", last.contact_pairs},
                         {"max_cell_occupancy", last.max_cell_occupancy},
@@ -84,6 +98,37 @@ RunRecord measure_detection(ContactDetector& detector, const Scene& scene,
                                  *measure.expected_contact_pairs);
   }
   return record;
+}
+
+void add_visit(RunRecord& record, const RunRecord& visit, int round) {
+  if (!record.aggregates || !visit.aggregates || !record.work || !visit.work) {
+    throw InputError("add_visit: both runs must be measured (failed runs have no samples)");
+  }
+  RunSamples& s = record.samples;
+  const RunSamples& v = visit.samples;
+  if (!s.round) s.round.emplace(s.total_s.size(), 0);
+  auto append = [](auto& into, const auto& from) {
+    into.insert(into.end(), from.begin(), from.end());
+  };
+  append(s.setup_s, v.setup_s);
+  append(s.detect_s, v.detect_s);
+  append(s.total_s, v.total_s);
+  append(s.thread_busy_s, v.thread_busy_s);
+  append(s.imbalance, v.imbalance);
+  s.round->insert(s.round->end(), v.total_s.size(), round);
+  RunAggregates& a = *record.aggregates;
+  a.warmup_runs += visit.aggregates->warmup_runs;
+  a.measurement_s += visit.aggregates->measurement_s;
+  summarize_samples(record, record.parameters.repetition.level);
+  if (record.status == RunStatus::kOk && visit.status != RunStatus::kOk) {
+    record.status = visit.status;
+    record.message = fmt::format("round {}: {}", round, visit.message);
+  } else if (record.status == RunStatus::kOk &&
+             visit.work->contact_pairs != record.work->contact_pairs) {
+    record.status = RunStatus::kInvalid;
+    record.message = fmt::format("contact count differs between rounds ({} in round {}, {} before)",
+                                 visit.work->contact_pairs, round, record.work->contact_pairs);
+  }
 }
 
 RunRecord failed_run(RunParameters parameters, std::string message) {

@@ -2,6 +2,7 @@
 
 #include <fmt/core.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstring>
@@ -339,17 +340,20 @@ struct FieldTable<RunParameters> {
 template <>
 struct FieldTable<RunSamples> {
   using T = RunSamples;
-  static constexpr auto kFields = std::tuple{
-      field("setup_s", &T::setup_s), field("detect_s", &T::detect_s), field("total_s", &T::total_s),
-      field("thread_busy_s", &T::thread_busy_s), field("imbalance", &T::imbalance)};
+  static constexpr auto kFields =
+      std::tuple{field("setup_s", &T::setup_s),     field("detect_s", &T::detect_s),
+                 field("total_s", &T::total_s),     field("thread_busy_s", &T::thread_busy_s),
+                 field("imbalance", &T::imbalance), field("round", &T::round).only_when_set()};
   static void validate(const JsonIn& in, const T& v) {
     const std::size_t n = v.setup_s.size();
     if (v.detect_s.size() != n || v.total_s.size() != n || v.thread_busy_s.size() != n ||
-        v.imbalance.size() != n) {
+        v.imbalance.size() != n || (v.round && v.round->size() != n)) {
       in.fail(
-          "setup_s, detect_s, total_s, thread_busy_s and imbalance must have one entry per "
+          "setup_s, detect_s, total_s, thread_busy_s, imbalance and round must have one entry per "
           "repetition");
     }
+    if (v.round && std::any_of(v.round->begin(), v.round->end(), [](int r) { return r < 0; }))
+      in.fail("round: rounds are numbered from 0");
   }
 };
 

@@ -74,18 +74,13 @@ SweepSummary run_sweep(const Experiment& experiment, const SweepOptions& options
   namespace fs = std::filesystem;
   check_writable(options.out);
   ResultFile result;
-  std::set<std::string> done;
   if (fs::exists(options.out)) {
     if (!options.resume) {
       throw InputError(options.out +
                        ": exists; pass --resume to continue that sweep, or choose another file");
     }
     result = read_result_file(options.out);
-    for (const RunRecord& run : result.runs) {
-      if (run.status == RunStatus::kFailed) continue;  // failed points are tried again
-      done.insert(
-          point_key(run.parameters.scene.checksum, run.parameters.variant, run.parameters.threads));
-    }
+    // Failed points are tried again, in every round.
     std::erase_if(result.runs, [](const RunRecord& r) { return r.status == RunStatus::kFailed; });
   }
   const int max_threads = *std::max_element(experiment.threads.begin(), experiment.threads.end());
@@ -93,9 +88,8 @@ SweepSummary run_sweep(const Experiment& experiment, const SweepOptions& options
   for (const std::string& warning : result.context.warnings)
     fmt::print(stderr, "warning: {}\n", warning);
 
-  const std::vector<ExperimentPoint> points = experiment_points(experiment);
   SweepSummary summary;
-  summary.points = points.size();
+  summary.points = experiment_points(experiment).size();
 
   // Scenes and their reference contacts, made once each.
   std::vector<std::pair<Scene, SceneRecord>> scenes;
@@ -107,42 +101,71 @@ SweepSummary run_sweep(const Experiment& experiment, const SweepOptions& options
   std::optional<CacheGeometry> geometry;
   if (!experiment.cache_sim.empty()) geometry = parse_cache_geometry(experiment.cache_sim);
 
-  std::vector<const ExperimentPoint*> todo;
-  for (const ExperimentPoint& point : points) {
-    if (done.count(point_key(scenes[point.scene].second.checksum, to_string(point.variant),
-                             point.threads))) {
-      ++summary.skipped;
-    } else {
-      todo.push_back(&point);
+  // Each point's record in result.runs, by key.
+  auto key_of = [&](const ExperimentPoint& point) {
+    return point_key(scenes[point.scene].second.checksum, to_string(point.variant), point.threads);
+  };
+  std::map<std::string, std::size_t> record_of;
+  for (std::size_t r = 0; r < result.runs.size(); ++r) {
+    const RunParameters& p = result.runs[r].parameters;
+    record_of[point_key(p.scene.checksum, p.variant, p.threads)] = r;
+  }
+  // Whether the file already holds the point's visit in `round` (a file without rounds holds
+  // round 0 only).
+  auto has_round = [&](const ExperimentPoint& point, int round) {
+    const auto at = record_of.find(key_of(point));
+    if (at == record_of.end()) return false;
+    const auto& rounds = result.runs[at->second].samples.round;
+    return rounds ? std::find(rounds->begin(), rounds->end(), round) != rounds->end() : round == 0;
+  };
+  // The visits left, round by round, each round in its own order.
+  std::vector<std::pair<int, ExperimentPoint>> todo;
+  std::set<std::string> measured;  // points visited in this sweep
+  for (const ExperimentPoint& point : experiment_points(experiment)) {
+    bool complete = true;
+    for (int round = 0; round < experiment.rounds; ++round) complete &= has_round(point, round);
+    summary.skipped += complete;
+  }
+  for (int round = 0; round < experiment.rounds; ++round) {
+    for (const ExperimentPoint& point : experiment_points(experiment, round)) {
+      if (!has_round(point, round)) todo.emplace_back(round, point);
     }
   }
   const bool bar = options.progress && ::isatty(STDERR_FILENO);
   const double start = omp_get_wtime();
   for (std::size_t index = 0; index < todo.size(); ++index) {
-    const ExperimentPoint& point = *todo[index];
+    const auto& [round, point] = todo[index];
+    const std::string key = key_of(point);
+    const auto existing = record_of.find(key);
+    // A point that failed in an earlier round of this sweep is not measured again.
+    if (existing != record_of.end() && result.runs[existing->second].status == RunStatus::kFailed)
+      continue;
     const auto& [scene, scene_record] = scenes[point.scene];
     const double diameter = experiment.scenes[point.scene].diameter;
     if (bar) {
       const double elapsed = omp_get_wtime() - start;
       const double eta = index ? elapsed / double(index) * double(todo.size() - index) : 0.0;
-      fmt::print(stderr, "\r\033[K[{}/{}] {:3.0f}%  elapsed {}  ETA {}  {} threads {}", index + 1,
+      fmt::print(stderr, "\r\033[K[{}/{}] {:3.0f}%  elapsed {}  ETA {}  {} threads {}{}", index + 1,
                  todo.size(), 100.0 * double(index) / double(todo.size()), format_duration(elapsed),
-                 index ? format_duration(eta) : "?", to_string(point.variant), point.threads);
+                 index ? format_duration(eta) : "?", to_string(point.variant), point.threads,
+                 experiment.rounds > 1 ? fmt::format("  round {}", round + 1) : "");
     }
     DetectOptions detect{point.variant, diameter, point.threads, nullptr};
     RunParameters parameters{to_string(point.variant), point.threads, scene_record,
                              experiment.repetitions};
+    // Counters and simulated caches are not timings: counted at the point's first visit only.
+    const bool first_visit = existing == record_of.end();
     RunRecord run;
     try {
       MeasureOptions measure;
       measure.repetition = experiment.repetitions;
-      measure.papi = papi ? &*papi : nullptr;
+      measure.papi = papi && first_visit ? &*papi : nullptr;
       if (experiment.check_contacts && !references.count(point.scene)) {
         detector.run(scene, DetectOptions{kReferenceVariant, diameter, point.threads, nullptr});
         references[point.scene] = detector.canonical_contacts();
       }
       run = measure_detection(detector, scene, scene_record, detect, measure);
-      if (geometry) {
+      if (geometry && first_visit) {
         run.counters.push_back(
             simulate_detection_caches(scene, diameter, point.variant, point.threads, *geometry));
       }
@@ -161,7 +184,22 @@ SweepSummary run_sweep(const Experiment& experiment, const SweepOptions& options
     } catch (const std::bad_alloc&) {
       run = failed_run(parameters, "out of memory");
     }
-    switch (run.status) {
+    measured.insert(key);
+    if (experiment.rounds > 1 && run.status != RunStatus::kFailed) {
+      run.samples.round.emplace(run.samples.total_s.size(), round);
+    }
+    if (first_visit) {
+      record_of[key] = result.runs.size();
+      result.runs.push_back(std::move(run));
+    } else if (run.status == RunStatus::kFailed) {
+      result.runs[existing->second] = std::move(run);  // the point is tried again on --resume
+    } else {
+      add_visit(result.runs[existing->second], run, round);
+    }
+    write_result_file(options.out, result);  // after every visit: an interruption loses nothing
+  }
+  for (const std::string& key : measured) {
+    switch (result.runs[record_of.at(key)].status) {
       case RunStatus::kOk:
         ++summary.ok;
         break;
@@ -172,8 +210,6 @@ SweepSummary run_sweep(const Experiment& experiment, const SweepOptions& options
         ++summary.failed;
         break;
     }
-    result.runs.push_back(std::move(run));
-    write_result_file(options.out, result);  // after every point: an interruption loses nothing
   }
   if (bar) fmt::print(stderr, "\r\033[K");
   summary.seconds = omp_get_wtime() - start;

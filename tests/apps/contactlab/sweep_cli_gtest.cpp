@@ -73,6 +73,35 @@ TEST(SweepCli, InterruptedSweepResumesToTheSameSetOfPoints) {
   EXPECT_EQ(point_keys(dir + "/r.json").size(), 20u);
 }
 
+// With rounds, every point holds one visit of `min` repetitions per round, each tagged with its
+// round, and a sweep interrupted mid-round resumes to the same visits.
+TEST(SweepCli, RoundsVisitEveryPointOncePerRoundAndResume) {
+  const std::string dir = temp_dir("sweep_rounds");
+  json config = json::parse(std::ifstream(kSmoke));
+  config["repetitions"] = {{"warmup", 0}, {"min", 2}, {"rounds", 3}};
+  std::ofstream(dir + "/rounds.json") << config.dump();
+  const std::string sweep =
+      contactlab_exe() + " sweep " + dir + "/rounds.json --out " + dir + "/r.json";
+  run_command("timeout -s INT 1 " + sweep);
+  const auto resumed = run_command(sweep + " --resume");
+  ASSERT_EQ(resumed.exit_code, 0) << resumed.output;
+  const tuner::ResultFile result = tuner::read_result_file(dir + "/r.json");
+  ASSERT_EQ(result.runs.size(), 20u);
+  for (const auto& run : result.runs) {
+    EXPECT_EQ(run.status, tuner::RunStatus::kOk) << run.message;
+    ASSERT_TRUE(run.samples.round) << run.parameters.variant;
+    std::multiset<int> rounds(run.samples.round->begin(), run.samples.round->end());
+    EXPECT_EQ(rounds, (std::multiset<int>{0, 0, 1, 1, 2, 2})) << run.parameters.variant;
+    ASSERT_TRUE(run.aggregates);
+    EXPECT_EQ(run.aggregates->repetitions, 6);
+    EXPECT_EQ(run.samples.total_s.size(), 6u);
+  }
+  // Resuming a complete sweep measures nothing.
+  const auto again = run_command(sweep + " --resume");
+  ASSERT_EQ(again.exit_code, 0) << again.output;
+  EXPECT_NE(again.output.find("20 already done"), std::string::npos) << again.output;
+}
+
 TEST(SweepCli, BadConfigIsOneLineAndWritesNothing) {
   const std::string dir = temp_dir("sweep_bad");
   std::ofstream(dir + "/bad.json")

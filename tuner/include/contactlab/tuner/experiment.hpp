@@ -33,8 +33,14 @@ struct Experiment {
   std::vector<int> chunks;
   std::vector<int> threads;
   // "repetitions": {"warmup", "min" (timed runs), "max", "target_ci" (relative half-width of
-  // the median's 95% interval; repetition is adaptive when given), "budget_s" (per point)}.
+  // the median's 95% interval; repetition is adaptive when given), "budget_s" (per point),
+  // "rounds"}.
   RepetitionPolicy repetitions;
+  // Every point is visited once per round, each round in its own seeded order, with the policy's
+  // warm-up and fixed count each visit; the samples carry their round, so that two points can
+  // be compared by ratios within rounds (a slow spell of the machine then slows both). 1: each
+  // point measured once, its repetitions back to back.
+  int rounds = 1;
   bool papi = false;
   std::string cache_sim;         // "", "host" or "fx10"
   bool check_contacts = true;    // count wrong contacts against the double-precision reference
@@ -52,8 +58,9 @@ struct ExperimentPoint {
 };
 
 // Every point of the experiment, in a seeded random order that interleaves scenes, variants
-// and thread counts, so that slow drift of the machine spreads over all of them.
-std::vector<ExperimentPoint> experiment_points(const Experiment& experiment);
+// and thread counts, so that slow drift of the machine spreads over all of them; each round has
+// its own order (round 0's is the order of order_seed itself).
+std::vector<ExperimentPoint> experiment_points(const Experiment& experiment, int round = 0);
 
 // Throws InputError "<file>: <json path>: <problem>" for any invalid, unknown or missing field.
 Experiment parse_experiment(const nlohmann::json& document, const std::string& source);

@@ -30,6 +30,12 @@ RunRecord measure_detection(ContactDetector& detector, const Scene& scene,
                             const SceneRecord& scene_record, const DetectOptions& options,
                             const MeasureOptions& measure);
 
+// Adds a later visit of the same point (a sweep's next round) to its record: the samples
+// appended, their rounds kept (the record's first visit is round 0 unless it says otherwise),
+// the summaries taken over all of them. The record becomes invalid when the visit is, or when
+// its contact count differs from the record's.
+void add_visit(RunRecord& record, const RunRecord& visit, int round);
+
 // The record of a run that could not be made: status failed, the message, no aggregates.
 RunRecord failed_run(RunParameters parameters, std::string message);
 

@@ -60,6 +60,9 @@ struct RunSamples {
   std::vector<double> total_s;                     // T_s + T_c
   std::vector<std::vector<double>> thread_busy_s;  // [repetition][thread], detection loop
   std::vector<double> imbalance;                   // (t_max - t_mean) / t_max per repetition
+  // The sweep round each repetition belongs to (experiments with "rounds"; absent otherwise):
+  // ratios between two runs are taken within a round.
+  std::optional<std::vector<int>> round;
 };
 
 struct RunAggregates {
