@@ -7,8 +7,8 @@ do not overlap."""
 from types import SimpleNamespace
 
 from . import tuning
-from .common import (cell, context_line, emulated, load_results, num, ok_runs, paired_ratio, plt,
-                     predicted, ratio_interval, reading, round_medians, save_figure, summary, table)
+from .common import (cell, context_line, emulated, load_results, num, ok_runs, plt, predicted,
+                     reading, round_medians, run_ratio, save_figure, summary, table)
 
 
 def collect(path):
@@ -48,11 +48,10 @@ def _compare(study, value, reference):
     """value's T_c over reference's: (ratio Interval, whether it is a real difference, how it
     was measured)."""
     if study.rounds:
-        r = paired_ratio(study.rounds[_variant_of(study, value)],
-                         study.rounds[_variant_of(study, reference)])
-        if r is not None:
-            return r, r.low > 1.0 or r.high < 1.0, f"median of {study.round_count} rounds' ratios"
-    r = ratio_interval(value, reference)
+        r = run_ratio(value, reference, study.rounds[_variant_of(study, value)],
+                      study.rounds[_variant_of(study, reference)])
+        return r, r.low > 1.0 or r.high < 1.0, f"median of {study.round_count} rounds' ratios"
+    r = run_ratio(value, reference)
     return r, not value.overlaps(reference), "independent medians"
 
 

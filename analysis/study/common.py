@@ -201,6 +201,17 @@ def paired_ratio(numerator, denominator):
     return median_interval([numerator[r] / denominator[r] for r in common])
 
 
+def run_ratio(numerator, denominator, numerator_rounds=None, denominator_rounds=None):
+    """numerator / denominator of two runs' summaries (Interval): the median of the per-round
+    ratios where both runs carry rounds (round_medians) and share some, else the conservative
+    ratio of independent medians (ratio_interval)."""
+    if numerator_rounds and denominator_rounds:
+        paired = paired_ratio(numerator_rounds, denominator_rounds)
+        if paired is not None:
+            return paired
+    return ratio_interval(numerator, denominator)
+
+
 def ok_runs(document):
     """[(path, run)] of the runs whose status is ok."""
     return [(f"$.runs[{i}]", r) for i, r in enumerate(document["runs"]) if r["status"] == "ok"]

@@ -3,8 +3,8 @@ theirs: measured where this machine has the threads, emulated (marked) where it 
 from types import SimpleNamespace
 
 from .common import (EMULATED, Interval, cell, context_line, emulated, items, load_results, need,
-                     num, number, ok_runs, percent, plt, ratio_interval, reading, relative_error,
-                     runs_by_variant_threads, save_figure, speedup_cell, summary, table)
+                     num, number, ok_runs, percent, plt, reading, relative_error, round_medians,
+                     run_ratio, runs_by_variant_threads, save_figure, speedup_cell, summary, table)
 
 FLAT = 1.5  # a gain below this from 2 to 8 threads (ideal 4x) is what we call flattening
 
@@ -13,15 +13,22 @@ def collect(paper_tables_path, emulation):
     """Per paper table: the paper's row, our measured intervals and the emulated values."""
     if paper_tables_path is None and emulation is None:
         return None
-    measured, context = {}, None
+    measured, rounds, context = {}, {}, None
     if paper_tables_path:
         document = load_results(paper_tables_path)
         context = context_line(document)
         with reading(paper_tables_path):
             for key, (path, run) in runs_by_variant_threads(document).items():
                 measured[key] = {f: summary(run, path, f) for f in ("setup_s", "detect_s", "total_s")}
-    return SimpleNamespace(measured=measured, context=context, emulation=emulation,
+                rounds[key] = round_medians(run, path, "total_s")  # None without rounds
+    return SimpleNamespace(measured=measured, rounds=rounds, context=context, emulation=emulation,
                            path=paper_tables_path)
+
+
+def _t_all_ratio(data, numerator_key, denominator_key):
+    """T_ALL of one measured run over another's: paired by round where the sweep ran in rounds."""
+    return run_ratio(data.measured[numerator_key]["total_s"], data.measured[denominator_key]["total_s"],
+                     data.rounds.get(numerator_key), data.rounds.get(denominator_key))
 
 
 def _curves(data, table):
@@ -33,7 +40,7 @@ def _curves(data, table):
     for t in table["threads"]:
         run = data.measured.get((variant, t))
         if run:
-            speedup = ratio_interval(serial["total_s"], run["total_s"]) if serial else None
+            speedup = _t_all_ratio(data, (variant, 1), (variant, t)) if serial else None
             curve[t] = (run["total_s"], speedup, False)
         elif emulation and t in emulation.emulated:
             e = emulation.emulated[t]
@@ -56,10 +63,17 @@ def tables_section(data, paper, out):
     if data is None:
         out.append("Not run (no paper-tables.json or emulation-threads.json).")
         return
+    rounds = [r for r in data.rounds.values() if r is not None]
+    if rounds and len(rounds) == len(data.rounds):
+        speedup = (f"Speed-up = the median of the per-round ratios T1 / TP (the sweep visited every "
+                   f"point once in each of {len(set().union(*rounds))} rounds, so a slow spell of "
+                   "the machine slows both sides of a ratio), with its 95 % interval.")
+    else:
+        speedup = ("Speed-up = ratio of the medians; its interval is conservative: "
+                   "[T1.low / TP.high, T1.high / TP.low], which holds whenever both medians lie "
+                   "in their intervals.")
     out.append(f"Ours measured: {data.context or 'not run (no paper-tables.json)'}. "
-               "Cells: median [95 % interval] of the timed repetitions. Speed-up = ratio of the "
-               "medians; its interval is conservative: [T1.low / TP.high, T1.high / TP.low], "
-               "which holds whenever both medians lie in their intervals. The paper: FX10, "
+               f"Cells: median [95 % interval] of the timed repetitions. {speedup} The paper: FX10, "
                "16 cores per node (its scene's density law is not given; ours is docs/scenes.md).")
     if data.emulation:
         out.append(f"Emulated ({EMULATED}): {context_line(data.emulation.document)}; at the thread "
@@ -85,7 +99,7 @@ def tables_section(data, paper, out):
     unsorted = data.measured.get(("particle/unsorted/full/static", 1))
     sorted_ = data.measured.get(("particle/sorted/full/static", 1))
     if unsorted and sorted_:
-        r = ratio_interval(unsorted["total_s"], sorted_["total_s"])
+        r = _t_all_ratio(data, ("particle/unsorted/full/static", 1), ("particle/sorted/full/static", 1))
         out.append(f"\nReordering at 1 thread: particle/unsorted / particle/sorted T_ALL = "
                    f"**{speedup_cell(r)}x** (paper 8.273 / 2.005 = 4.1x).")
 
