@@ -40,7 +40,9 @@ bool running_under_valgrind() {
 
 }  // namespace
 
-int main(int argc, char** argv) {
+// Exceptions other than those caught below are bugs: std::terminate, which names them, ends
+// the program.
+int main(int argc, char** argv) {  // NOLINT(bugprone-exception-escape)
   CLI::App app{
       "contactlab-cachesim: one detection under valgrind's cache simulator (run by "
       "contactlab detect --cache-sim)"};

@@ -28,7 +28,9 @@ bool quiet_mpi_rank(int argc, char** argv) {
 
 }  // namespace
 
-int main(int argc, char** argv) {
+// Exceptions other than those caught below are bugs: std::terminate, which names them, ends
+// the program.
+int main(int argc, char** argv) {  // NOLINT(bugprone-exception-escape)
   namespace cli = contactlab::cli;
   CLI::App app{"contactlab: particle contact detection — variants, measurement, tuning"};
   app.require_subcommand(1);

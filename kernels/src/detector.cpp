@@ -93,7 +93,7 @@ void ContactDetector::detect(const CellGrid& grid, const Layout& layout, const P
     const std::size_t wanted =
         std::max(contacts_.partners.size() +
                      simd::kBlockHomes *
-                         (9 * (traversal::kTileCells + 2) * std::size_t{registry_.max_occupancy}) +
+                         (std::size_t{9} * (traversal::kTileCells + 2) * registry_.max_occupancy) +
                      simd::kAppendSlack,
                  static_cast<std::size_t>(2.0 * 0.155 * candidates));
     if (contacts_.partners.capacity() < wanted) {

@@ -92,6 +92,7 @@ SceneKind parse_scene_kind(std::string_view text) {
 
 std::vector<SceneKind> all_scene_kinds() {
   std::vector<SceneKind> kinds;
+  kinds.reserve(kKindNames.size());
   for (const auto& entry : kKindNames) kinds.push_back(entry.first);
   return kinds;
 }

@@ -209,6 +209,7 @@ void AppendBlock(const BlockTask<Real>& task) {
     if constexpr (sizeof(Real) == sizeof(std::uint32_t)) {
       slot_hit = hn::RebindMask(du, hit);
 #if HWY_TARGET <= HWY_AVX3
+      // NOLINTNEXTLINE(readability-simplify-boolean-expr): a branch only AVX-512 targets have
     } else if constexpr (true) {  // AVX-512: both are the same 8-bit mask register
       slot_hit.raw = hit.raw;
 #endif

@@ -31,7 +31,7 @@ std::string config_ending_at(const TempDir& dir, const std::string& end) {
   const auto at = text.find(key);
   EXPECT_NE(at, std::string::npos);
   text.replace(at, key.size(), "\"end\": " + end);
-  const std::string path = dir.file("drop-" + end + ".json");
+  std::string path = dir.file("drop-" + end + ".json");
   std::ofstream(path) << text;
   return path;
 }
@@ -94,7 +94,7 @@ TEST(DemCli, BadConfigIsOneLineAndNoOutput) {
 // A tiny flat-bottomed hopper: 150 spheres thrown down onto a gate over a 6 mm orifice, the
 // gate gone at 1 ms, a sink 2 mm below the plate.
 std::string tiny_hopper(const TempDir& dir) {
-  const std::string path = dir.file("tiny-hopper.json");
+  std::string path = dir.file("tiny-hopper.json");
   std::ofstream(path) << R"({
     "schema_version": 1, "name": "tiny",
     "domain": {"lo": [-0.009, -0.009, -0.004], "hi": [0.009, 0.009, 0.02]},
@@ -142,7 +142,7 @@ std::string tiny_hopper_with_sink(const TempDir& dir, const std::string& below) 
   std::string text = slurp(tiny_hopper(dir));
   const std::string key = "\"below\": -0.002";
   text.replace(text.find(key), key.size(), "\"below\": " + below);
-  const std::string config = dir.file("sink-" + below + ".json");
+  std::string config = dir.file("sink-" + below + ".json");
   std::ofstream(config) << text;
   return config;
 }

@@ -27,8 +27,10 @@ std::unique_ptr<Engine> bed_engine(const ForceVariant& variant, int threads, std
   Particles p;
   Xoshiro256 rng(7);
   for (std::uint32_t k = 0; k < side * side * layers; ++k) {
-    p.add(k, 0, (k % side + 0.5) * pitch, (k / side % side + 0.5) * pitch,
-          (k / (side * side) + 0.5) * pitch, 9e-4 + 1e-4 * rng.uniform(), 2500.0);
+    // NOLINTNEXTLINE(bugprone-integer-division): the lattice layer, an integer on purpose
+    const double z = (k / (side * side) + 0.5) * pitch;
+    p.add(k, 0, (k % side + 0.5) * pitch, (k / side % side + 0.5) * pitch, z,
+          9e-4 + 1e-4 * rng.uniform(), 2500.0);
     p.vx[k] = 0.2 * (2 * rng.uniform() - 1);
     p.vy[k] = 0.2 * (2 * rng.uniform() - 1);
     p.vz[k] = 0.2 * (2 * rng.uniform() - 1);

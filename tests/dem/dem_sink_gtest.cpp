@@ -48,7 +48,7 @@ std::vector<double> state_by_sparse_id(const Engine& engine) {
   for (std::size_t a = 0; a < p.size(); ++a) {
     const double v[9] = {p.x[a],  p.y[a],  p.z[a],  p.vx[a], p.vy[a],
                          p.vz[a], p.wx[a], p.wy[a], p.wz[a]};
-    std::memcpy(&out[9 * p.id[a]], v, sizeof v);
+    std::memcpy(&out[std::size_t{9} * p.id[a]], v, sizeof v);
   }
   return out;
 }

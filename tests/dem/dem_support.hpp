@@ -32,8 +32,9 @@ inline std::pair<EngineSettings, Particles> small_bed(std::uint32_t n = 150,
   Xoshiro256 rng(3);
   const double pitch = 2.2e-3;
   for (std::uint32_t k = 0; k < n; ++k) {
-    const double x = (k % 4 + 0.5) * 2.5e-3, y = (k / 4 % 4 + 0.5) * 2.5e-3,
-                 z = 1.2e-3 + (k / 16) * pitch;
+    const double x = (k % 4 + 0.5) * 2.5e-3, y = (k / 4 % 4 + 0.5) * 2.5e-3;
+    // NOLINTNEXTLINE(bugprone-integer-division): the lattice layer, an integer on purpose
+    const double z = 1.2e-3 + (k / 16) * pitch;
     p.add(k, 0, x, y, z, 5e-4 + 5e-4 * rng.uniform(), 2500.0);
     p.vx[k] = 0.3 * (2 * rng.uniform() - 1);
     p.vy[k] = 0.3 * (2 * rng.uniform() - 1);
@@ -50,7 +51,7 @@ inline std::vector<double> state_by_id(const Engine& engine) {
   for (std::size_t a = 0; a < p.size(); ++a) {
     const double v[9] = {p.x[a],  p.y[a],  p.z[a],  p.vx[a], p.vy[a],
                          p.vz[a], p.wx[a], p.wy[a], p.wz[a]};
-    std::memcpy(&out[9 * p.id[a]], v, sizeof v);
+    std::memcpy(&out[std::size_t{9} * p.id[a]], v, sizeof v);
   }
   return out;
 }

@@ -38,11 +38,6 @@ KindSetup setup_for(SceneKind kind) {
       setup.spec.diameter = 0.08;
       break;
     case SceneKind::kClustered:
-      setup.spec.n = 2500;
-      setup.spec.diameter = 0.03;
-      setup.spec.core = 0.5;
-      setup.spec.background = 0.2;
-      break;
     case SceneKind::kBlobs:
       setup.spec.n = 2500;
       setup.spec.diameter = 0.03;
@@ -205,7 +200,7 @@ TEST(SimdTarget, ListsTheScalarLoopAndRefusesUnknownNames) {
   ASSERT_GE(targets.size(), 2u);
   EXPECT_EQ(targets.back(), "off");
   // Highway's portable path (EMU128, or SCALAR where its emulation is broken) is always built.
-  const std::string portable = targets[targets.size() - 2];
+  const std::string& portable = targets[targets.size() - 2];
   EXPECT_TRUE(portable == "EMU128" || portable == "SCALAR") << portable;
   try {
     select_simd_target("avx9000");

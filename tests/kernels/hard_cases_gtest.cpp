@@ -23,7 +23,7 @@ using Pairs = std::vector<std::pair<std::uint32_t, std::uint32_t>>;
 // reporting after a few failures so that one bug does not bury the output.
 void expect_variants_match(const Scene& scene, double d, const ContactList& expected,
                            const std::vector<Variant>& variants,
-                           std::vector<int> threads = {1, 2, 3}) {
+                           const std::vector<int>& threads = {1, 2, 3}) {
   int failures = 0;
   for (const Variant& variant : variants) {
     const ContactList& want = expected;
@@ -95,7 +95,7 @@ Lattice make_lattice(const Box& box, double spacing, const std::vector<int>& ind
 }
 
 void check_lattice(const Lattice& lattice, double d, const std::vector<Variant>& variants,
-                   std::vector<int> threads) {
+                   const std::vector<int>& threads) {
   const Scene& scene = lattice.scene;
   validate_scene(scene, "lattice");
   // The construction really is exact: every axis neighbour difference is D to the bit.
@@ -120,7 +120,7 @@ void check_lattice(const Lattice& lattice, double d, const std::vector<Variant>&
       ASSERT_EQ(brute.count(a), 6u) << "interior point " << a;
     }
   }
-  expect_variants_match(scene, d, lattice.expected, variants, std::move(threads));
+  expect_variants_match(scene, d, lattice.expected, variants, threads);
 }
 
 // D = 1/200 rounded to the dyadic 41/8192 = 0.0050048828125, so that the lattice is exact.
@@ -312,6 +312,7 @@ TEST(HardCase, AllParticlesInOneCell) {
   // Cell 9 on each axis spans [9/19, 10/19) = [0.4736.., 0.5263..).
   Xoshiro256 rng(77);
   std::vector<Point> points;
+  points.reserve(400);
   for (int k = 0; k < 400; ++k) {
     points.push_back(
         {0.48 + 0.04 * rng.uniform(), 0.48 + 0.04 * rng.uniform(), 0.48 + 0.04 * rng.uniform()});

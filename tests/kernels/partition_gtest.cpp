@@ -110,7 +110,7 @@ TEST(Partition, WorkSplitIsBalancedWithinOneParticlesWork) {
 TEST(Partition, SyntheticUniformWorkSplitsEvenly) {
   CellHistogram histogram;
   histogram.dims = {16, 16, 16};
-  histogram.count.assign(16 * 16 * 16, 4);
+  histogram.count.assign(std::size_t{16} * 16 * 16, 4);
   for (const int ranks : {2, 4, 8, 64}) {
     const PartitionReport volume =
         evaluate_partition(histogram, Partition(histogram, ranks, PartitionMethod::kVolume));

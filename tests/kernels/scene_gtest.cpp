@@ -123,6 +123,7 @@ TEST(SceneChecksum, EqualExactlyForBitIdenticalScenes) {
   spec.kind = SceneKind::kPolydisperse;
   spec.n = 100;
   const Scene a = generate_scene(spec);
+  // NOLINTNEXTLINE(performance-unnecessary-copy-initialization): the copy is the point
   const Scene b = a;
   EXPECT_EQ(scene_checksum(a), scene_checksum(b));
   // One bit anywhere changes it: a coordinate, a diameter, the box, and -0.0 versus 0.0.

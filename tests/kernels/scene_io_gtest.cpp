@@ -244,8 +244,8 @@ TEST(SceneIo, BadBinaryFilesThrow) {
   const std::string bytes = read_text(good);
   ASSERT_EQ(bytes.size(), 72u + 4 * 8 * 100);
 
-  auto variant = [&](const std::string& name, std::string content) {
-    const std::string path = dir.file(name);
+  auto variant = [&](const std::string& name, const std::string& content) {
+    std::string path = dir.file(name);
     write_text(path, content);
     return path;
   };
@@ -287,19 +287,19 @@ TEST(SceneIo, BadBinaryFilesThrow) {
     Scene s = scene;
     s.x[5] = std::numeric_limits<double>::quiet_NaN();
     std::string b = bytes;
-    std::memcpy(b.data() + 72 + 5 * 8, &s.x[5], 8);
+    std::memcpy(b.data() + 72 + 5 * sizeof(double), &s.x[5], 8);
     expect_binary_error(variant("nan.bin", b), "NaN in binary");
   }
   {
     const double outside = 1.5;
     std::string b = bytes;
-    std::memcpy(b.data() + 72 + 8 * 100 + 7 * 8, &outside, 8);  // y[7]
+    std::memcpy(b.data() + 72 + (100 + 7) * sizeof(double), &outside, 8);  // y[7]
     expect_binary_error(variant("outside.bin", b), "outside in binary");
   }
   {
     const double zero = 0.0;
     std::string b = bytes;
-    std::memcpy(b.data() + 72 + 3 * 8 * 100, &zero, 8);  // d[0]
+    std::memcpy(b.data() + 72 + sizeof(double) * 3 * 100, &zero, 8);  // d[0]
     expect_binary_error(variant("zero-d.bin", b), "zero diameter in binary");
   }
   // read_binary_scene on a text file (read_scene would read it as text).

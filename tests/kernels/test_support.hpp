@@ -256,7 +256,13 @@ struct TiledCandidates {
 inline TiledCandidates expected_tiled_candidates(const Scene& scene, double diameter) {
   constexpr int kCells = traversal::kTileCells;
   constexpr std::uint64_t kLimit = 4;  // simd::kBlockHomes
-  const auto [grid, dims, count, cell] = cell_counts(scene, diameter);
+  // Named references, not a structured binding: the lambdas capture them, which clang before 16
+  // (clang-tidy) does not allow of structured bindings.
+  const CellCounts counts = cell_counts(scene, diameter);
+  const auto& grid = counts.grid;
+  const auto& dims = counts.dims;
+  const auto& count = counts.count;
+  const auto& cell = counts.cell;
   // Particles in cells x_lo..x_hi (clipped) of row (cy, cz).
   auto row = [&](int x_lo, int x_hi, int cy, int cz) {
     std::uint64_t sum = 0;

@@ -241,6 +241,7 @@ TEST(VariantAxes, EveryEnumeratedVariantKeepsTheRules) {
 TEST(Variant, PaperVariants) {
   const auto variants = paper_variants();
   std::vector<std::string> names;
+  names.reserve(variants.size());
   for (const auto& v : variants) names.push_back(to_string(v));
   EXPECT_EQ(names,
             (std::vector<std::string>{"particle/unsorted/full/static", "cell/unsorted/full/static",

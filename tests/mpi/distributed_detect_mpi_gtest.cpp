@@ -134,6 +134,7 @@ std::vector<NamedScene> hard_scenes() {
        make_scene({{0.3, 0.3, 0.3}, {0.3, 0.3, 0.3}, {0.3, 0.3, 0.3}, {0.9, 0.9, 0.9}}), 0.01});
   {
     std::vector<Point> points;
+    points.reserve(40);
     for (int i = 0; i < 40; ++i) points.push_back({0.5 + 1e-3 * (i % 5), 0.5, 0.5 + 1e-3 * i});
     scenes.push_back({"one_cell", make_scene(points), 0.1});
   }

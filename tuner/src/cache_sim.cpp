@@ -19,7 +19,8 @@
 #include "contactlab/kernels/scene_io.hpp"
 #include "contactlab/tuner/context.hpp"
 
-extern char** environ;
+// POSIX has the program declare environ (glibc's unistd.h does too, only under _GNU_SOURCE).
+extern char** environ;  // NOLINT(readability-redundant-declaration)
 
 namespace contactlab::tuner {
 namespace {
@@ -56,7 +57,7 @@ std::uint64_t parse_size(std::string_view text, const std::string& whole) {
     multiplier = 1024;
     text.remove_suffix(1);
   } else if (!text.empty() && (text.back() == 'M' || text.back() == 'm')) {
-    multiplier = 1024 * 1024;
+    multiplier = std::uint64_t{1024} * 1024;
     text.remove_suffix(1);
   }
   if (text.empty() || text.size() > 12 ||
@@ -103,7 +104,7 @@ std::string find_valgrind(const std::string& requested) {
   std::stringstream dirs(path ? path : "/usr/bin:/bin");
   std::string dir;
   while (std::getline(dirs, dir, ':')) {
-    const std::string full = (dir.empty() ? "." : dir) + "/valgrind";
+    std::string full = (dir.empty() ? "." : dir) + "/valgrind";
     if (::access(full.c_str(), X_OK) == 0) return full;
   }
   return "";
@@ -141,6 +142,7 @@ std::string valgrind_version(const std::string& log_path) {
 // status, or -1 with `error` set.
 int run_process(const std::vector<std::string>& argv, const std::string& log, std::string& error) {
   std::vector<char*> args;
+  args.reserve(argv.size() + 1);
   for (const auto& a : argv) args.push_back(const_cast<char*>(a.c_str()));
   args.push_back(nullptr);
   std::vector<std::string> env_strings;
@@ -149,6 +151,7 @@ int run_process(const std::vector<std::string>& argv, const std::string& log, st
   }
   env_strings.emplace_back("OMP_WAIT_POLICY=passive");
   std::vector<char*> envp;
+  envp.reserve(env_strings.size() + 1);
   for (auto& e : env_strings) envp.push_back(e.data());
   envp.push_back(nullptr);
 
@@ -185,8 +188,8 @@ constexpr const char* kRegion =
 CacheGeometry fx10_geometry() {
   CacheGeometry g;
   g.name = "fx10";
-  g.l1 = {32 * 1024, 2, 128};
-  g.l2 = {12 * 1024 * 1024, 24, 128};
+  g.l1 = {std::uint64_t{32} * 1024, 2, 128};
+  g.l2 = {std::uint64_t{12} * 1024 * 1024, 24, 128};
   g.description =
       "Fujitsu FX10 (SPARC64 IXfx) approximation: L1D 32 KiB 2-way 128 B lines, shared L2 12 MiB "
       "24-way 128 B lines (as commonly cited, not checked against the hardware); no prefetch, "

@@ -16,6 +16,7 @@ double KernelRun::phase_s(std::string_view name) const {
 
 std::vector<double> MeasuredKernel::samples(const Variant& variant, int threads, int count) {
   std::vector<double> result;
+  result.reserve(static_cast<std::size_t>(std::max(count, 0)));
   for (int i = 0; i < count; ++i) result.push_back(run(variant, threads).phase_s(tuned_phase()));
   return result;
 }

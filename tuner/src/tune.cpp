@@ -109,6 +109,7 @@ std::vector<ClassicEntry> classic_entries(MeasuredKernel& kernel, const PricedSt
   const WorkView work{structure.work.tests, structure.work.homes, structure.work.builds};
   std::vector<NamedChunk> chunks = classic_chunks(work, threads, structure.costs);
   std::vector<int> k;
+  k.reserve(chunks.size());
   for (const NamedChunk& c : chunks) k.push_back(c.chunk);
   kernel.from_first_part(k);
   for (std::size_t i = 0; i < chunks.size(); ++i) chunks[i].chunk = k[i];

@@ -85,20 +85,20 @@ std::uint64_t ForceLoopWork::total_pairs() const {
   return std::accumulate(own_pairs.begin(), own_pairs.end(), std::uint64_t{0});
 }
 
-ForceLoopWork force_loop_work(const PairList& q, std::size_t n) {
+ForceLoopWork force_loop_work(const PairList& pairs, std::size_t particles) {
   ForceLoopWork work;
-  work.particles = n;
-  const std::size_t blocks = (n + kRowsPerBlock - 1) / kRowsPerBlock;
+  work.particles = particles;
+  const std::size_t blocks = (particles + kRowsPerBlock - 1) / kRowsPerBlock;
   work.reach_offsets.push_back(0);
-  const std::size_t span_blocks = q.max_span / kRowsPerBlock + 2;
+  const std::size_t span_blocks = pairs.max_span / kRowsPerBlock + 2;
   std::vector<std::uint32_t> reach(span_blocks + 1, 0);  // by b - (j's block)
   for (std::size_t b = 0; b < blocks; ++b) {
-    const std::size_t first = b * kRowsPerBlock, last = std::min(n, first + kRowsPerBlock);
+    const std::size_t first = b * kRowsPerBlock, last = std::min(particles, first + kRowsPerBlock);
     work.block_particles.push_back(static_cast<std::uint32_t>(last - first));
-    work.own_pairs.push_back(q.rows[last] - q.rows[first]);
-    work.j_side_pairs.push_back(q.j_offsets[last] - q.j_offsets[first]);
-    for (std::size_t k = q.rows[first]; k < q.rows[last]; ++k) {
-      const std::size_t back = b - q.j[k] / kRowsPerBlock;  // j <= i: never negative
+    work.own_pairs.push_back(pairs.rows[last] - pairs.rows[first]);
+    work.j_side_pairs.push_back(pairs.j_offsets[last] - pairs.j_offsets[first]);
+    for (std::size_t k = pairs.rows[first]; k < pairs.rows[last]; ++k) {
+      const std::size_t back = b - pairs.j[k] / kRowsPerBlock;  // j <= i: never negative
       if (back > 0) ++reach[std::min(back, span_blocks)];
     }
     for (std::size_t back = 1; back <= span_blocks; ++back) {
@@ -243,6 +243,7 @@ std::vector<RankedVariant> rank_force_variants(const ForceLoopWork& work,
                                                const std::vector<ForceVariant>& candidates,
                                                int threads, const ForceCosts& costs) {
   std::vector<RankedVariant> ranked;
+  ranked.reserve(candidates.size());
   for (const ForceVariant& v : candidates) {
     ranked.push_back({v, predict_force_pass(work, v, threads, costs)});
   }

@@ -113,7 +113,7 @@ template <bool kRolling, bool kClamp, class V>
   const V zero{}, one = splat<V>(1.0);
   PairOutputs<V> out;
   const V flag = delta > kFailFraction * in.rmin ? splat<V>(2.0) : one;
-  out.flag = touch & (delta > kWarnFraction * in.rmin) ? flag : zero;
+  out.flag = (touch & (delta > kWarnFraction * in.rmin)) ? flag : zero;
   // Relative velocity of the contact point: v_i - v_j - (r_i w_i + r_j w_j) x n.
   const V sx = in.sx, sy = in.sy, sz = in.sz;
   const V vx = in.dvx - (sy * nz - sz * ny);

@@ -198,6 +198,7 @@ inline void drift_particles(Particles& p, double* kin, const DriftTerms& t, std:
     disp_max = disp_max < disp ? disp : disp_max;
     const Lanes step_sq = mx * mx + my * my + mz * mz, sum = xa + ya + za;
     // x - x is 0 exactly when x is finite (inf - inf and NaN - NaN are NaN).
+    // NOLINTNEXTLINE(misc-redundant-expression): that finiteness test, on purpose
     if (any_false((step_sq <= limit) & (sum - sum == 0.0))) [[unlikely]] {
       for (std::size_t l = 0; l < kLanes; ++l) {
         if (!(step_sq[l] <= limit) || !std::isfinite(sum[l])) {

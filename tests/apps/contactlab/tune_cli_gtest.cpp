@@ -23,7 +23,7 @@ std::string tune_cache() { return CONTACTLAB_TUNE_CACHE_DIR; }
 // A fresh cache holding the shared calibration and no tuned choice, for the tests whose first
 // step must miss.
 std::string cache_without_choices(const std::string& name) {
-  const std::string dir = temp_dir(name);
+  std::string dir = temp_dir(name);
   json cache = json::parse(std::ifstream(tune_cache() + "/tuning.json"));
   cache["choices"] = json::object();
   std::ofstream(dir + "/tuning.json") << cache.dump();

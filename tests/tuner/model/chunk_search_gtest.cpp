@@ -45,6 +45,7 @@ struct SyntheticLoop {
     return [this](int chunk) {
       ++calls;
       std::vector<double> samples;
+      samples.reserve(9);
       const double truth = seconds(std::log2(static_cast<double>(chunk)));
       for (int i = 0; i < 9; ++i) samples.push_back(truth * (1.0 + relative_noise * noise.next()));
       return samples;
@@ -139,7 +140,7 @@ TEST(ExhaustiveSweep, RoundsVisitEveryChunkOncePerRoundInShuffledOrder) {
   const ChunkSearchResult all = exhaustive_chunk_sweep(record, options);
   ASSERT_EQ(visits.size(), 3u * 17u);
   EXPECT_EQ(all.evaluations, 51);
-  for (int round = 0; round < 3; ++round) {
+  for (std::ptrdiff_t round = 0; round < 3; ++round) {
     std::vector<int> this_round(visits.begin() + 17 * round, visits.begin() + 17 * (round + 1));
     EXPECT_FALSE(std::is_sorted(this_round.begin(), this_round.end())) << "round " << round;
     std::sort(this_round.begin(), this_round.end());
@@ -164,7 +165,7 @@ TEST(ExhaustiveSweep, MeasuresTheBlockWithTheGridAsTheLargestChunk) {
     ChunkSearchOptions options;
     options.rounds = 2;
     options.with_block = true;
-    const ChunkSearchResult all = exhaustive_chunk_sweep(record, options);
+    ChunkSearchResult all = exhaustive_chunk_sweep(record, options);
     EXPECT_EQ(std::count(visits.begin(), visits.end(), 0), 2);
     EXPECT_EQ(visits.size(), 2u * 18u);
     EXPECT_EQ(all.measured.back().chunk, 0);
@@ -243,6 +244,7 @@ TEST(SearchChunk, SeededByTheScheduleModel) {
     const double truth =
         simulate_schedule(work, threads, {ScheduleKind::kStatic, chunk}, costs).makespan_seconds;
     std::vector<double> samples;
+    samples.reserve(9);
     for (int i = 0; i < 9; ++i) samples.push_back(truth * (1.0 + 0.002 * noise.next()));
     return samples;
   };

@@ -193,8 +193,8 @@ class ContactDetector {
   // Whether the prepared particles' contact test runs on SIMD lanes (in blocks of homes, with
   // tiles of sparse cells): run() and iteration_work() decide alike.
   bool tests_on_lanes() const;
-  void assemble_rows(int thread, int threads, bool half, bool rows_in_blocks);
-  void copy_row_blocks(int thread, int threads);
+  void assemble_rows(int tid, int threads, bool half, bool rows_in_blocks);
+  void copy_row_blocks(int tid, int threads);
 
   std::vector<std::uint64_t> range_sums_;  // assemble_rows: each thread's rows, summed
   CellRegistry registry_;
