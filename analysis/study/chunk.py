@@ -41,6 +41,7 @@ def collect(path):
 
 
 def _variant_of(study, value):
+    """The variant whose summary is `value` (series and block hold the summaries themselves)."""
     return next(v for v, x in study.by_variant.items() if x is value)
 
 

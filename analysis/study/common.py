@@ -5,6 +5,7 @@ import contextlib
 import json
 import math
 import os
+import statistics
 from dataclasses import dataclass
 
 import matplotlib
@@ -188,7 +189,7 @@ def round_medians(run, path, field):
     by_round = {}
     for r, v in zip(rounds, values):
         by_round.setdefault(r, []).append(v)
-    return {r: median_interval(v).median for r, v in by_round.items()}
+    return {r: statistics.median(v) for r, v in by_round.items()}
 
 
 def paired_ratio(numerator, denominator):
