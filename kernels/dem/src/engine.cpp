@@ -12,12 +12,10 @@
 #include "contactlab/kernels/error.hpp"
 #include "force_pass.hpp"
 #include "particle_update.hpp"
+#include "wall_law.hpp"
 
 namespace contactlab::dem {
-using detail::kFailFraction;
 using detail::kKinStride;
-using detail::kWarnFraction;
-using detail::tangential;
 
 Engine::Engine(EngineSettings settings, Particles particles)
     : settings_(std::move(settings)),
@@ -301,103 +299,18 @@ void Engine::compute_forces(bool final_kick, bool drift_next) {
   if (block_scratch_.size() < static_cast<std::size_t>(settings_.threads)) {
     block_scratch_.resize(static_cast<std::size_t>(settings_.threads));
   }
-  const std::size_t wall_count = settings_.walls.size();
-  std::vector<Vec3> wall_point(wall_count), wall_velocity(wall_count);
-  std::vector<std::uint8_t> wall_plane(wall_count), wall_active(wall_count);
-  for (std::size_t w = 0; w < wall_count; ++w) {
-    const Wall& wall = settings_.walls[w];
-    wall_velocity[w] = wall.velocity_at(time_s_);
-    const Vec3 shift = wall.offset(time_s_);
-    for (int k = 0; k < 3; ++k) wall_point[w][k] = wall.point[k] + shift[k];
-    wall_plane[w] = wall.kind == WallKind::kPlane;
-    wall_active[w] = wall.active(time_s_);
-  }
   // A particle's finish: its pair sums (its own row, then its j sides in pair order: fixed,
   // so bit-identical for any thread count), walls, gravity, kick.
   double* acc = acc_.data();
-  // Particle a's wall contacts added to its sums f (force), t (torque) and touching.
-  auto add_walls = [&](std::size_t a, double& fx, double& fy, double& fz, double& tx, double& ty,
-                       double& tz, double& touching, std::uint64_t& large_here,
-                       std::uint32_t& bad_wall_here) {
-    const std::uint32_t reach = wall_reach_[a];
-    // Most particles of a scene reach no wall: skip them before loading anything else.
-    if (reach == 0 && wall_count <= 32) return;
-    // a's position, radius, mass and synchronised velocities from its kin_ block (one or two
-    // cache lines, not nine arrays); the same values as the particle arrays.
-    const double* ka = &kin_[kKinStride * a];
-    const double xa = ka[0], ya = ka[1], za = ka[2], r = ka[3], mass = ka[7];
-    const double pvxa = ka[4], pvya = ka[5], pvza = ka[6], pwxa = ka[8], pwya = ka[9],
-                 pwza = ka[10];
-    for (std::size_t w = 0; w < wall_count; ++w) {
-      if (w < 32 && ((reach >> w) & 1u) == 0) continue;  // out of reach (its spring is zero)
-      double* hx = &p.wall_spring[3 * w][a];
-      double* hy = &p.wall_spring[3 * w + 1][a];
-      double* hz = &p.wall_spring[3 * w + 2][a];
-      double dx, dy, dz;
-      bool any = wall_active[w];
-      if (wall_plane[w]) {  // inline: the distance along the normal, no closest point
-        const Vec3& o = wall_point[w];
-        const Vec3& nn = settings_.walls[w].normal;
-        const double along = (xa - o[0]) * nn[0] + (ya - o[1]) * nn[1] + (za - o[2]) * nn[2];
-        dx = along * nn[0];
-        dy = along * nn[1];
-        dz = along * nn[2];
-      } else {
-        Vec3 cp{};
-        any = closest_point(settings_.walls[w], time_s_, {xa, ya, za}, cp);
-        dx = xa - cp[0];
-        dy = ya - cp[1];
-        dz = za - cp[2];
-      }
-      const double rsq = dx * dx + dy * dy + dz * dz;
-      if (!any || rsq >= r * r || rsq == 0.0) {
-        *hx = *hy = *hz = 0.0;
-        continue;
-      }
-      const double dist = std::sqrt(rsq), inv = 1.0 / dist;
-      const double nx = dx * inv, ny = dy * inv, nz = dz * inv;
-      const double delta = r - dist;
-      large_here += delta > kWarnFraction * r;
-      if (delta > kFailFraction * r)
-        bad_wall_here = std::min(bad_wall_here, static_cast<std::uint32_t>(a));
-      const double m_star = mass;
-      const Vec3& wv = wall_velocity[w];
-      const double sx = r * pwxa, sy = r * pwya, sz = r * pwza;
-      const double vx = pvxa - wv[0] - (sy * nz - sz * ny);
-      const double vy = pvya - wv[1] - (sz * nx - sx * nz);
-      const double vz = pvza - wv[2] - (sx * ny - sy * nx);
-      const double vn = vx * nx + vy * ny + vz * nz;
-      const double kn = c.k_abs + c.k_per_mass * m_star, cn = c.c_per_mass * m_star;
-      double fn = kn * delta - cn * vn;
-      if (c.clamp) fn = std::max(fn, 0.0);
-      const detail::Tangential<double> ft =
-          tangential(nx, ny, nz, vx - vn * nx, vy - vn * ny, vz - vn * nz, fn, c.kt_ratio * kn,
-                     detail::inverse_kt(c, m_star), c.ct_ratio * cn, c.mu, dt, *hx, *hy, *hz);
-      fx += fn * nx + ft.ftx;
-      fy += fn * ny + ft.fty;
-      fz += fn * nz + ft.ftz;
-      tx -= r * (ny * ft.ftz - nz * ft.fty);
-      ty -= r * (nz * ft.ftx - nx * ft.ftz);
-      tz -= r * (nx * ft.fty - ny * ft.ftx);
-      if (rolling) {
-        const double om = std::sqrt(pwxa * pwxa + pwya * pwya + pwza * pwza);
-        const double s = om > 0 ? -c.mu_roll * fn * r / om : 0.0;
-        tx += s * pwxa;
-        ty += s * pwya;
-        tz += s * pwza;
-      }
-      touching += fn > 0;
-    }
-  };
+  const detail::WallLaw wall_law(settings_.walls, time_s_, c, dt);
   // The walls of particles [first, last) into their sums (in the finish, or with walls=serial
   // for all particles on one thread after all pairs): only those some wall may reach.
   auto walls = [&](std::size_t first, std::size_t last, std::uint64_t& large_here,
                    std::uint32_t& bad_wall_here) {
     auto a = std::lower_bound(wall_reachers_.begin(), wall_reachers_.end(), first);
     for (; a != wall_reachers_.end() && *a < last; ++a) {
-      double* sum = acc + detail::kAccStride * *a;
-      add_walls(*a, sum[0], sum[1], sum[2], sum[3], sum[4], sum[5], sum[6], large_here,
-                bad_wall_here);
+      wall_law.add(*a, wall_reach_[*a], &kin_[kKinStride * *a], p, acc + detail::kAccStride * *a,
+                   large_here, bad_wall_here);
     }
   };
   // The particles [first, last)'s finish: their walls into their sums (unless added
