@@ -7,6 +7,7 @@
 
 #include "contactlab/kernels/error.hpp"
 #include "contactlab/tuner/field_table.hpp"
+#include "context_tables.hpp"
 
 namespace contactlab::tuner {
 

@@ -17,10 +17,12 @@
 // (unknown keys rejected, missing ones named, every error with the JSON path). A parse function's
 // InputError is reported at the enclosing object, prefixed with the field name.
 //
-// A table is declared in the one source file that writes and reads its record, before any use;
-// other files go through the to_json / read functions that file declares in a header, so that
-// the generic functions below never see the record with a table in one file and without in
-// another.
+// A table is declared before any use in the one source file that writes and reads its record,
+// or, where another file's tables hold the record too, in a private header both include
+// (tuner/src/context_tables.hpp); other files go through the to_json / read functions declared
+// in a public header. The generic functions below must never see a record with a table in one
+// file and without one in another: to_json_value<T> would then be two functions under one name,
+// and the linker keeps either.
 #pragma once
 
 #include <array>
