@@ -76,16 +76,22 @@ namespace contactlab::simd {
 namespace HWY_NAMESPACE {
 namespace hn = hwy::HWY_NAMESPACE;
 
-// The lanes of `valid` (the first ones) loaded from p, the others zero. Highway 1.0's MaskedLoad
-// below AVX2 is an aligned load of the whole vector (and a blend): at a range's unaligned last
-// vector it faults wherever GCC does not fold it into the next instruction. There the whole
-// vector is read unaligned, as that MaskedLoad reads it; AVX2 and AVX-512 load only the lanes.
+// The first `count` lanes (those of `valid`) loaded from p, the others zero, reading nothing past
+// p[count - 1]: a range's last vector may end at the array's end. AVX2 and AVX-512 load only the
+// lanes. Below AVX2 Highway 1.0's MaskedLoad is an aligned load of the whole vector and a blend
+// (it faulted at a range's unaligned last vector wherever GCC did not fold it into the next
+// instruction), and an unaligned load of the whole vector reads past the array (AddressSanitizer
+// reported it; where the array ends at an unmapped page it would fault): the lanes are copied
+// to a zeroed vector on the stack instead, a scalar copy of at most three.
 template <class D, class T>
-HWY_INLINE hn::Vec<D> LoadFirst(D d, hn::Mask<D> valid, const T* HWY_RESTRICT p) {
+HWY_INLINE hn::Vec<D> LoadFirst(D d, [[maybe_unused]] hn::Mask<D> valid, const T* HWY_RESTRICT p,
+                                [[maybe_unused]] std::uint32_t count) {
 #if HWY_TARGET <= HWY_AVX2
   return hn::MaskedLoad(valid, d, p);
 #else
-  return hn::IfThenElseZero(valid, hn::LoadU(d, p));
+  alignas(16) T lanes[hn::MaxLanes(d)] = {};
+  for (std::uint32_t l = 0; l < count; ++l) lanes[l] = p[l];
+  return hn::Load(d, lanes);
 #endif
 }
 
@@ -239,7 +245,7 @@ void AppendBlock(const BlockTask<Real>& task) {
         if constexpr (kWhole) {
           return hn::LoadU(d, p + s);
         } else {  // AVX2 keeps a masked load a masked load even under an all-true mask
-          return LoadFirst(d, valid, p + s);
+          return LoadFirst(d, valid, p + s, end - s);
         }
       };
       const V cx = load(px), cy = load(py), cz = load(pz);
