@@ -59,6 +59,14 @@ endfunction()
 # the environment of every MPI test (Open MPI refuses root without its two variables).
 set(CONTACTLAB_MPI_TEST_ENVIRONMENT OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
     OMP_WAIT_POLICY=passive OMPI_MCA_rmaps_base_oversubscribe=1)
+# Under the address sanitizer: with several ranks Open MPI's plugins keep a few bytes each from
+# the first communications until exit, in plugins unloaded at MPI_Finalize (the leak report
+# cannot name them, so no suppression can); the leak check is off for these tests only, memory
+# errors are still reported. (What MPI_Init and MPI_Finalize keep is left out where they are
+# called, kernels/mpi/src/runtime.cpp, for every program.)
+if(CONTACTLAB_SANITIZE MATCHES "address")
+  list(APPEND CONTACTLAB_MPI_TEST_ENVIRONMENT ASAN_OPTIONS=detect_leaks=0)
+endif()
 set(CONTACTLAB_MPIEXEC_FLAGS "")
 if(MPIEXEC_EXECUTABLE)
   execute_process(COMMAND ${MPIEXEC_EXECUTABLE} --version OUTPUT_VARIABLE _cl_mpiexec_version

@@ -293,8 +293,7 @@ class FailurePrinter : public ::testing::EmptyTestEventListener {
 // GoogleTest under MPI: every rank runs the tests; rank 0 prints the progress, the others
 // their failures only.
 int main(int argc, char** argv) {
-  int provided = 0;
-  MPI_Init_thread(&argc, &argv, MPI_THREAD_FUNNELED, &provided);
+  const contactlab::mpi::Session session(&argc, &argv);
   ::testing::InitGoogleTest(&argc, argv);
   if (contactlab::mpi::rank_of(MPI_COMM_WORLD) != 0) {
     auto& listeners = ::testing::UnitTest::GetInstance()->listeners();
@@ -304,6 +303,5 @@ int main(int argc, char** argv) {
   const int failed = RUN_ALL_TESTS();
   int any = 0;
   MPI_Allreduce(&failed, &any, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD);
-  MPI_Finalize();
-  return any;
+  return any;  // the session finalises MPI
 }
