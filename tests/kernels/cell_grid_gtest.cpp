@@ -245,6 +245,17 @@ void check_registry(const CellGrid& grid, const Scene& scene, int threads) {
     ASSERT_EQ(registry.particle_slot[registry.slot_particle[s]], s);
   }
   for (std::size_t i = 0; i < n; ++i) ASSERT_EQ(seen[i], 1) << "particle " << i;
+  // A stable sort: within a cell the particles keep their input order, for any thread count.
+  auto key_of = [&](std::uint32_t i) {
+    const auto c = grid.coords_of(scene.x[i], scene.y[i], scene.z[i]);
+    return grid.key(c[0], c[1], c[2]);
+  };
+  for (std::size_t s = 1; s < n; ++s) {
+    const std::uint32_t i = registry.slot_particle[s - 1], j = registry.slot_particle[s];
+    if (key_of(i) == key_of(j)) {
+      ASSERT_LT(i, j) << "slot " << s;
+    }
+  }
   std::vector<std::uint32_t> count(grid.key_count(), 0);
   for (std::size_t i = 0; i < n; ++i) {
     const auto c = grid.coords_of(scene.x[i], scene.y[i], scene.z[i]);
@@ -306,6 +317,20 @@ TEST(CellRegistry, CountingSortInvariants) {
         }
       }
     }
+  }
+}
+
+// Four radix passes (a 330^3 grid's 26-bit keys): with more than one thread the top digit goes
+// first and three lower passes follow, an odd number, and the top digit shares two bits with
+// the third lower digit.
+TEST(CellRegistry, FourPassesTopDigitFirst) {
+  SceneSpec spec;
+  spec.kind = SceneKind::kClustered;
+  spec.n = 20000;
+  spec.seed = 8;
+  const Scene scene = generate_scene(spec);
+  for (const int threads : {1, 2, 3}) {
+    check_registry(CellGrid(scene.box, 1.0 / 330, CellNumbering::kLinear), scene, threads);
   }
 }
 
