@@ -108,18 +108,27 @@ struct NeighbourRanges {
       // Away from the faces every row is in the grid: its keys by addition, no bounds (the
       // multiplications and clamps of the general case below were half of a sparse home's
       // range build).
+      // The count, the own range and the candidates in locals, stored once: as members each
+      // row's store to ranges[] made them a store and a reload per row (GCC cannot tell the
+      // array from them), a chain through memory across the nine rows.
       const auto centre = static_cast<std::int64_t>(index.key(grid, home[0], home[1], home[2]));
-      for (int r = 0; r < stencil.count; ++r) {
+      int kept = 0, own_at = 0;
+      std::uint64_t total = 0;
+      const int rows = stencil.count, own_row = stencil.own;
+      for (int r = 0; r < rows; ++r) {
         const StencilRow& row = stencil.rows[r];
         const SlotRange range =
             index.key_range(r, static_cast<std::uint64_t>(centre + row.first_key),
                             static_cast<std::uint64_t>(centre + row.last_key + widen));
         index.prefetch_ahead(static_cast<std::uint64_t>(centre + row.first_key));
-        own = r == stencil.own ? count : own;
-        ranges[count] = range;  // kept only if it holds a particle, as below
-        count += range.begin != range.end;
-        candidates += range.end - range.begin;
+        own_at = r == own_row ? kept : own_at;
+        ranges[kept] = range;  // kept only if it holds a particle, as below
+        kept += range.begin != range.end;
+        total += range.end - range.begin;
       }
+      count = kept;
+      own = own_at;
+      candidates = total;
       return;
     }
     std::array<std::uint64_t, 3> x_part{};  // Morton: the x parts of the home's x - 1 .. x + 1
