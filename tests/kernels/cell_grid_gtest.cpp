@@ -321,8 +321,8 @@ TEST(CellRegistry, CountingSortInvariants) {
 }
 
 // Four radix passes (a 330^3 grid's 26-bit keys): with more than one thread the top digit goes
-// first and three lower passes follow, an odd number, and the top digit shares two bits with
-// the third lower digit.
+// first and three lower passes follow, an odd number, and the top digit (bits 18 - 25) shares
+// six bits with the third lower digit (16 - 23).
 TEST(CellRegistry, FourPassesTopDigitFirst) {
   SceneSpec spec;
   spec.kind = SceneKind::kClustered;
