@@ -37,7 +37,7 @@ Subcommand add_sweep_command(CLI::App& app, const std::string& command_line) {
       ->required();
   sub->add_option("--out", command->options_.out, "result file")->required();
   sub->add_flag("--resume", command->options_.resume,
-                "keep the finished points of --out and run the rest");
+                "keep the finished points of --out, run the rest (same machine and build)");
   return {sub, [command] { return command->run(); }};
 }
 

@@ -10,12 +10,14 @@
 #include <map>
 #include <optional>
 #include <set>
+#include <string>
 
 #include "contactlab/kernels/atomic_file.hpp"
 #include "contactlab/kernels/detector.hpp"
 #include "contactlab/kernels/error.hpp"
 #include "contactlab/kernels/scene_io.hpp"
 #include "contactlab/tuner/cache_sim.hpp"
+#include "contactlab/tuner/context.hpp"
 #include "contactlab/tuner/measure.hpp"
 #include "contactlab/tuner/papi_counters.hpp"
 
@@ -25,6 +27,42 @@ namespace {
 // The exact reference every point is checked against: double precision, half stencil (the
 // tests prove every double variant equal to the brute force).
 const Variant kReferenceVariant = parse_variant("particle/sorted/half/static");
+
+// What a result file's context says of where and by what its points were measured: the
+// machine (the CPU as hwloc or /proc/cpuinfo names it, its cores and caches) and the build.
+std::string machine_of(const Context& context) {
+  const MachineInfo& m = context.machine;
+  std::string model = m.cpu_model;
+  model.erase(model.find_last_not_of(' ') + 1);
+  std::string text = fmt::format("'{}' ({} cores, {} logical CPUs", model, m.cores, m.pus);
+  for (const CacheInfo& cache : m.caches) {
+    text += fmt::format(", L{} {} {} KiB", cache.level, cache.type, cache.size_bytes / 1024);
+  }
+  return text + ")";
+}
+std::string build_of(const Context& context) {
+  const BuildRecord& b = context.build;
+  return fmt::format("commit {}{} ({}, {}, flags '{}')", b.git_commit.substr(0, 10),
+                     b.git_dirty ? " with local changes" : "", b.compiler, b.build_type, b.flags);
+}
+
+// A resumed sweep adds its visits to the file's points under the file's one context, which
+// names one machine and one build for all of them: so only on that machine and with that build
+// (elsewhere, the points measured before would be labelled as this run's).
+void check_resumable(const std::string& path, const Context& file, const Context& now) {
+  if (machine_of(file) != machine_of(now)) {
+    throw InputError(fmt::format(
+        "{}: measured on {}, this machine is {}: --resume continues a sweep on the same machine "
+        "and build only (write to another --out)",
+        path, machine_of(file), machine_of(now)));
+  }
+  if (build_of(file) != build_of(now)) {
+    throw InputError(fmt::format(
+        "{}: measured by the build of {}, this program is {}: --resume continues a sweep on the "
+        "same machine and build only (write to another --out)",
+        path, build_of(file), build_of(now)));
+  }
+}
 
 std::string format_duration(double seconds) {
   const long s = std::lround(seconds);
@@ -75,12 +113,14 @@ SweepSummary run_sweep(const Experiment& experiment, const SweepOptions& options
   namespace fs = std::filesystem;
   check_writable(options.out);
   ResultFile result;
+  std::optional<Context> resumed;  // the context of the file resumed
   if (fs::exists(options.out)) {
     if (!options.resume) {
       throw InputError(options.out +
                        ": exists; pass --resume to continue that sweep, or choose another file");
     }
     result = read_result_file(options.out);
+    resumed = result.context;
     // Failed points are tried again, in every round.
     std::erase_if(result.runs, [](const RunRecord& r) { return r.status == RunStatus::kFailed; });
   }
@@ -132,6 +172,7 @@ SweepSummary run_sweep(const Experiment& experiment, const SweepOptions& options
       if (!has_round(point, round)) todo.emplace_back(round, point);
     }
   }
+  if (resumed && !todo.empty()) check_resumable(options.out, *resumed, result.context);
   const bool bar = options.progress && ::isatty(STDERR_FILENO);
   const double start = omp_get_wtime();
   for (std::size_t index = 0; index < todo.size(); ++index) {

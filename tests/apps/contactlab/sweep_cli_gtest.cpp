@@ -102,6 +102,50 @@ TEST(SweepCli, RoundsVisitEveryPointOncePerRoundAndResume) {
   EXPECT_NE(again.output.find("20 already done"), std::string::npos) << again.output;
 }
 
+// A sweep resumes only on the machine and with the build its file names: the file's one context
+// would otherwise label the points measured before, elsewhere or by other code, as this run's.
+// A complete file resumes to nothing measured whatever made it (the study resumes its sweeps).
+TEST(SweepCli, ResumesOnlyOnTheMachineAndBuildItsFileNames) {
+  const std::string dir = temp_dir("sweep_origin");
+  const std::string out = dir + "/r.json";
+  const std::string sweep = contactlab_exe() + " sweep " + kSmoke + " --out " + out;
+  const auto first = run_command(sweep);
+  ASSERT_EQ(first.exit_code, 0) << first.output;
+  json file = json::parse(std::ifstream(out));
+  const json own_build = file["context"]["build"];
+  const json own_machine = file["context"]["machine"];
+  file["context"]["build"]["git_commit"] = "0123456789abcdef0123456789abcdef01234567";
+  std::ofstream(out) << file.dump();
+  const auto complete = run_command(sweep + " --resume");
+  EXPECT_EQ(complete.exit_code, 0) << complete.output;
+  EXPECT_NE(complete.output.find("20 already done"), std::string::npos) << complete.output;
+
+  file["runs"].erase(file["runs"].begin());  // a point left to measure
+  std::ofstream(out) << file.dump();
+  const std::string before = slurp(out);
+  const auto other_build = run_command(sweep + " --resume");
+  EXPECT_EQ(other_build.exit_code, 2) << other_build.output;
+  EXPECT_NE(other_build.output.find("measured by the build of commit 0123456789"),
+            std::string::npos)
+      << other_build.output;
+  EXPECT_NE(other_build.output.find("same machine and build only"), std::string::npos);
+  EXPECT_EQ(slurp(out), before);
+
+  file["context"]["build"] = own_build;
+  file["context"]["machine"]["cpu_model"] = "Another CPU";
+  std::ofstream(out) << file.dump();
+  const auto other_machine = run_command(sweep + " --resume");
+  EXPECT_EQ(other_machine.exit_code, 2) << other_machine.output;
+  EXPECT_NE(other_machine.output.find("measured on 'Another CPU'"), std::string::npos)
+      << other_machine.output;
+
+  file["context"]["machine"] = own_machine;  // its own machine and build: the point is measured
+  std::ofstream(out) << file.dump();
+  const auto own = run_command(sweep + " --resume");
+  ASSERT_EQ(own.exit_code, 0) << own.output;
+  EXPECT_EQ(point_keys(out).size(), 20u);
+}
+
 TEST(SweepCli, BadConfigIsOneLineAndWritesNothing) {
   const std::string dir = temp_dir("sweep_bad");
   std::ofstream(dir + "/bad.json")
