@@ -50,17 +50,19 @@ std::string build_of(const Context& context) {
 // names one machine and one build for all of them: so only on that machine and with that build
 // (elsewhere, the points measured before would be labelled as this run's).
 void check_resumable(const std::string& path, const Context& file, const Context& now) {
-  if (machine_of(file) != machine_of(now)) {
-    throw InputError(fmt::format(
-        "{}: measured on {}, this machine is {}: --resume continues a sweep on the same machine "
-        "and build only (write to another --out)",
-        path, machine_of(file), machine_of(now)));
+  const std::string file_machine = machine_of(file), machine = machine_of(now);
+  const std::string file_build = build_of(file), build = build_of(now);
+  std::string mismatch;
+  if (file_machine != machine) {
+    mismatch = fmt::format("measured on {}, this machine is {}", file_machine, machine);
+  } else if (file_build != build) {
+    mismatch = fmt::format("measured by the build of {}, this program is {}", file_build, build);
   }
-  if (build_of(file) != build_of(now)) {
+  if (!mismatch.empty()) {
     throw InputError(fmt::format(
-        "{}: measured by the build of {}, this program is {}: --resume continues a sweep on the "
-        "same machine and build only (write to another --out)",
-        path, build_of(file), build_of(now)));
+        "{}: {}: --resume continues a sweep on the same machine and build only (write to another "
+        "--out)",
+        path, mismatch));
   }
 }
 
