@@ -7,8 +7,9 @@
 #include <omp.h>
 
 #include <algorithm>
-#include <limits>
+#include <map>
 #include <numeric>
+#include <optional>
 #include <random>
 
 #include "contactlab/kernels/error.hpp"
@@ -47,44 +48,25 @@ class Verification {
         samples_[i].push_back(kernel.samples(distinct_[i], threads, 1).front());
       }
     }
-    // The fastest: the contender that no other beats in direct paired rounds (median ratio
-    // below 1), so that every regret against it is >= 0. Medians of ratios are not exactly
-    // transitive: where noise makes a cycle and none qualifies, the smallest median ratio
-    // against the first contender (always present).
-    std::vector<std::size_t> by_ratio(distinct_.size());
-    std::iota(by_ratio.begin(), by_ratio.end(), std::size_t{0});
-    std::vector<double> to_first(distinct_.size());
-    for (std::size_t i = 0; i < distinct_.size(); ++i) {
-      to_first[i] = paired_ratio(samples_[i], samples_[0]).median;
-    }
-    std::stable_sort(by_ratio.begin(), by_ratio.end(),
-                     [&](std::size_t a, std::size_t b) { return to_first[a] < to_first[b]; });
-    best_ = by_ratio.front();
-    for (const std::size_t i : by_ratio) {
-      bool beaten = false;
-      for (std::size_t j = 0; j < distinct_.size() && !beaten; ++j) {
-        beaten = j != i && paired_ratio(samples_[j], samples_[i]).median < 1.0;
-      }
-      if (!beaten) {
-        best_ = i;
-        break;
-      }
-    }
+    // The fastest: the smallest median slowdown against each round's fastest. Pairwise median
+    // ratios are not transitive (noise can make a cycle in which each contender beats the
+    // next); one number per contender is, so that every regret against the fastest is >= 0.
+    slowdowns_.emplace(samples_);
   }
   bool has(const std::string& name) const { return index_of_.count(name) != 0; }
   const std::vector<double>& samples_of(const std::string& name) const {
     return samples_[index_of_.at(name)];
   }
-  const std::vector<double>& best_samples() const { return samples_[best_]; }
-  const Variant& best() const { return distinct_[best_]; }
+  const Variant& best() const { return distinct_[slowdowns_->fastest()]; }
   std::size_t distinct_count() const { return distinct_.size(); }
 
   // The verified timings of one contender and its regrets, into its report entry.
   void attach(Verified& target, const std::string& name) const {
     target.measured = timing_of(samples_of(name));
-    const PairedRatio to_best = paired_ratio(samples_of(name), best_samples());
-    target.regret = to_best.median - 1.0;
-    target.regret_ci95 = {to_best.interval.low - 1.0, to_best.interval.high - 1.0};
+    const RoundSlowdowns::Ratio to_best =
+        slowdowns_->relative(index_of_.at(name), slowdowns_->fastest());
+    target.regret = to_best.value - 1.0;
+    target.regret_ci95 = {to_best.low - 1.0, to_best.high - 1.0};
     if (has("exhaustive")) {
       const PairedRatio to_exhaustive = paired_ratio(samples_of(name), samples_of("exhaustive"));
       target.vs_exhaustive =
@@ -97,7 +79,7 @@ class Verification {
   std::vector<Variant> distinct_;
   std::map<std::string, std::size_t> index_of_;
   std::vector<std::vector<double>> samples_;
-  std::size_t best_ = 0;
+  std::optional<RoundSlowdowns> slowdowns_;
 };
 
 // Classic formulas for the structure that is tuned, as report entries. A kernel of several
@@ -159,10 +141,10 @@ TuneReport tune_kernel(MeasuredKernel& kernel, const SceneRecord& scene,
 
   // Verification: each method's choice, each classic formula's k and the model's best schedule
   // of every structure it priced, timed alike, every distinct variant once per round in a new
-  // random order. Comparisons are paired ratios within rounds (drift of the machine cancels),
-  // and regret is against the fastest verified choice, not the minimum of the exhaustive
-  // sweep's own medians (biased low by noise). The structures are there because the methods
-  // choose among them: a structure no method chose could otherwise be faster unseen.
+  // random order. Comparisons are within rounds (drift of the machine cancels: each time over
+  // the round's fastest), and regret is against the fastest verified choice, not the minimum of the
+  // exhaustive sweep's own medians (biased low by noise). The structures are there because the
+  // methods choose among them: a structure no method chose could otherwise be faster unseen.
   std::vector<std::pair<std::string, Variant>> contenders = state.choices;
   for (ClassicEntry& c : report.classic) {
     const Variant variant = with_schedule(tuned.variant, state.tuned_kind, c.chunk);
@@ -175,7 +157,9 @@ TuneReport tune_kernel(MeasuredKernel& kernel, const SceneRecord& scene,
   const Verification verified(kernel, threads, contenders, options.verify_rounds);
   report.verification = VerificationSummary{
       options.verify_rounds, static_cast<int>(verified.distinct_count()),
-      to_string(verified.best()), "fastest verified choice; median of per-round paired ratios - 1"};
+      to_string(verified.best()),
+      "fastest verified choice (smallest median over rounds of time / the round's fastest time); "
+      "regret = that median over the fastest's - 1, 95% bootstrap interval over rounds"};
   for (ClassicEntry& entry : report.classic) verified.attach(entry, "classic:" + entry.name);
   for (MethodEntry& entry : report.methods) {
     verified.attach(entry, entry.method);

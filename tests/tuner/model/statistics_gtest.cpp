@@ -148,6 +148,66 @@ TEST(PairedRatio, RejectsBadPairs) {
   EXPECT_THROW(paired_ratio(std::vector<double>{1.0, std::nan("")}, one_to(2)), InputError);
 }
 
+using Rounds = std::vector<std::vector<double>>;
+
+TEST(RoundSlowdowns, RoundDriftCancels) {
+  // The drift of PairedRatio.RoundDriftCancels; b the fastest in every round, a 10% slower.
+  const std::vector<double> drift{1.0, 1.4, 0.9, 1.2, 1.0, 1.6, 1.1, 0.95};
+  std::vector<std::vector<double>> samples(2);
+  for (const double f : drift) {
+    samples[0].push_back(0.22 * f);
+    samples[1].push_back(0.2 * f);
+  }
+  const RoundSlowdowns s(samples);
+  EXPECT_EQ(s.fastest(), 1u);
+  EXPECT_NEAR(s.slowdown(0), 1.1, 1e-12);
+  EXPECT_EQ(s.slowdown(1), 1.0);
+  const RoundSlowdowns::Ratio a = s.relative(0, 1);
+  EXPECT_NEAR(a.value, 1.1, 1e-12);
+  EXPECT_NEAR(a.low, 1.1, 1e-12);
+  EXPECT_NEAR(a.high, 1.1, 1e-12);
+  const RoundSlowdowns::Ratio self = s.relative(1, 1);
+  EXPECT_EQ(self.value, 1.0);
+  EXPECT_EQ(self.low, 1.0);
+  EXPECT_EQ(self.high, 1.0);
+}
+
+TEST(RoundSlowdowns, APairwiseCycleStillHasAFastestThatNoneUndercuts) {
+  // Three rounds in which a beats b, b beats c and c beats a by their median paired ratios
+  // (0.952, 0.909, 0.917): against any one of them another's paired ratio is below 1. By
+  // slowdown against each round's fastest (a 1.1, b 1.05, c 1.1) b is the fastest and the
+  // others' ratios to it are 1.1 / 1.05.
+  const std::vector<std::vector<double>> samples{
+      {1.0, 1.2, 1.1}, {1.05, 1.0, 1.2}, {1.2, 1.1, 1.0}};
+  EXPECT_LT(paired_ratio(samples[0], samples[1]).median, 1.0);
+  EXPECT_LT(paired_ratio(samples[1], samples[2]).median, 1.0);
+  EXPECT_LT(paired_ratio(samples[2], samples[0]).median, 1.0);
+  const RoundSlowdowns s(samples);
+  EXPECT_EQ(s.fastest(), 1u);
+  for (std::size_t c = 0; c < samples.size(); ++c) {
+    const RoundSlowdowns::Ratio r = s.relative(c, s.fastest());
+    EXPECT_GE(r.value, 1.0);
+    EXPECT_LE(r.low, r.value);
+    EXPECT_GE(r.high, r.value);
+  }
+  EXPECT_DOUBLE_EQ(s.relative(0, 1).value, 1.1 / 1.05);
+}
+
+TEST(RoundSlowdowns, TiesGoToTheFirst) {
+  const RoundSlowdowns s(Rounds{{2.0, 1.0}, {1.0, 2.0}});
+  EXPECT_EQ(s.fastest(), 0u);
+  EXPECT_EQ(s.relative(1, 0).value, 1.0);
+}
+
+TEST(RoundSlowdowns, RejectsBadSamples) {
+  EXPECT_THROW(RoundSlowdowns(Rounds{}), InputError);
+  EXPECT_THROW(RoundSlowdowns(Rounds{std::vector<double>{}}), InputError);
+  EXPECT_THROW(RoundSlowdowns(Rounds{{1.0, 2.0}, {1.0}}), InputError);
+  EXPECT_THROW(RoundSlowdowns(Rounds{{1.0, 0.0}}), InputError);
+  EXPECT_THROW(RoundSlowdowns(Rounds{{1.0, std::nan("")}}), InputError);
+  EXPECT_THROW(RoundSlowdowns(Rounds{{1.0}}).relative(0, 0, 1.0), InputError);
+}
+
 TEST(Summarize, KnownValues) {
   const Summary s = summarize(std::vector<double>{4.0, 1.0, 3.0, 2.0, 10.0, 6.0});
   EXPECT_EQ(s.count, 6u);

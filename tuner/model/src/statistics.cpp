@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -118,6 +119,72 @@ PairedRatio paired_ratio(std::span<const double> a, std::span<const double> b, d
   result.median = median(ratios);  // throws for no pairs or a NaN
   result.interval = median_interval(ratios, level);
   return result;
+}
+
+RoundSlowdowns::RoundSlowdowns(const std::vector<std::vector<double>>& samples) {
+  if (samples.empty() || samples.front().empty()) {
+    throw InputError("round slowdowns: no configuration or no round to compare");
+  }
+  const std::size_t rounds = samples.front().size();
+  std::vector<double> round_fastest(rounds, std::numeric_limits<double>::infinity());
+  for (std::size_t c = 0; c < samples.size(); ++c) {
+    if (samples[c].size() != rounds) {
+      throw InputError("round slowdowns: configuration " + std::to_string(c) + " has " +
+                       std::to_string(samples[c].size()) + " rounds, the first " +
+                       std::to_string(rounds));
+    }
+    for (std::size_t r = 0; r < rounds; ++r) {
+      if (!(samples[c][r] > 0.0)) {
+        throw InputError("round slowdowns: configuration " + std::to_string(c) + ", round " +
+                         std::to_string(r) + " took " + std::to_string(samples[c][r]) +
+                         " (need > 0)");
+      }
+      round_fastest[r] = std::min(round_fastest[r], samples[c][r]);
+    }
+  }
+  to_round_fastest_.resize(samples.size());
+  for (std::size_t c = 0; c < samples.size(); ++c) {
+    for (std::size_t r = 0; r < rounds; ++r) {
+      to_round_fastest_[c].push_back(samples[c][r] / round_fastest[r]);
+    }
+    slowdown_.push_back(median(to_round_fastest_[c]));
+    if (slowdown_[c] < slowdown_[fastest_]) fastest_ = c;
+  }
+}
+
+RoundSlowdowns::Ratio RoundSlowdowns::relative(std::size_t c, std::size_t reference, double level,
+                                               int resamples) const {
+  if (!(level > 0.0 && level < 1.0) || resamples < 1) {
+    throw InputError("round slowdowns: level " + std::to_string(level) + " and " +
+                     std::to_string(resamples) + " resamples (need a level in (0, 1), >= 1)");
+  }
+  const std::vector<double>& of_c = to_round_fastest_.at(c);
+  const std::vector<double>& of_reference = to_round_fastest_.at(reference);
+  Ratio ratio;
+  ratio.value = slowdown_[c] / slowdown_[reference];
+  std::mt19937_64 random(20131001);
+  std::uniform_int_distribution<std::size_t> pick(0, of_c.size() - 1);
+  std::vector<double> drawn_c(of_c.size()), drawn_reference(of_c.size()), ratios;
+  ratios.reserve(static_cast<std::size_t>(resamples));
+  for (int b = 0; b < resamples; ++b) {
+    for (std::size_t i = 0; i < of_c.size(); ++i) {
+      const std::size_t r = pick(random);
+      drawn_c[i] = of_c[r];
+      drawn_reference[i] = of_reference[r];
+    }
+    ratios.push_back(median(drawn_c) / median(drawn_reference));
+  }
+  std::sort(ratios.begin(), ratios.end());
+  const auto at = [&](double q) {
+    const auto i =
+        static_cast<std::size_t>(std::lround(q * static_cast<double>(ratios.size() - 1)));
+    return ratios[std::min(i, ratios.size() - 1)];
+  };
+  // A median's bootstrap distribution is lumpy at a few rounds: the interval is widened to hold
+  // the estimate rather than report one that excludes it.
+  ratio.low = std::min(ratio.value, at(0.5 * (1.0 - level)));
+  ratio.high = std::max(ratio.value, at(0.5 * (1.0 + level)));
+  return ratio;
 }
 
 double load_imbalance(std::span<const double> thread_busy_s) {

@@ -48,7 +48,7 @@ struct TuneOptions {
   int search_samples = 3;      // timed runs per chunk evaluated by the search
   int exhaustive_rounds = 10;  // rounds over the whole chunk grid, one timed run per chunk each
   // Rounds of the final verification: every distinct choice timed once per round, in a new
-  // random order each round; regrets are paired ratios within rounds (statistics.hpp).
+  // random order each round; regrets compare within rounds (statistics.hpp, RoundSlowdowns).
   int verify_rounds = 30;
   // Extra thread counts for which the model predicts the best chunk (labelled predicted).
   std::vector<int> predict_threads{4, 8, 16};

@@ -6,6 +6,7 @@
 #include <functional>
 #include <span>
 #include <string_view>
+#include <vector>
 
 namespace contactlab::tuner {
 
@@ -61,6 +62,37 @@ struct PairedRatio {
 
 // Throws InputError for no pairs, unequal lengths, a NaN, or some b_i <= 0.
 PairedRatio paired_ratio(std::span<const double> a, std::span<const double> b, double level = 0.95);
+
+// Several configurations timed in the same rounds (samples[c][r]: configuration c in round r),
+// each compared with the round's fastest: its slowdown is the median over rounds of
+// t_cr / min_j t_jr. Paired within rounds like paired_ratio, but one number per configuration,
+// so the fastest (smallest slowdown) is well defined where pairwise median ratios can form a
+// cycle, and every slowdown relative to it is >= 1.
+class RoundSlowdowns {
+ public:
+  // Throws InputError for no configuration, no round, unequal round counts, a NaN or a time
+  // <= 0.
+  explicit RoundSlowdowns(const std::vector<std::vector<double>>& samples);
+
+  double slowdown(std::size_t c) const { return slowdown_[c]; }
+  // The smallest slowdown; the first of equal ones.
+  std::size_t fastest() const { return fastest_; }
+
+  // slowdown(c) / slowdown(reference) with a percentile-bootstrap interval over rounds (the
+  // same resampled rounds for both; fixed seed, so a report is reproducible).
+  struct Ratio {
+    double value = 0.0;
+    double low = 0.0;
+    double high = 0.0;
+  };
+  Ratio relative(std::size_t c, std::size_t reference, double level = 0.95,
+                 int resamples = 2000) const;
+
+ private:
+  std::vector<std::vector<double>> to_round_fastest_;  // t_cr / min_j t_jr
+  std::vector<double> slowdown_;
+  std::size_t fastest_ = 0;
+};
 
 // Load imbalance of one parallel loop from each thread's busy time:
 // (t_max - t_mean) / t_max; 0 for no threads or when every time is 0.
