@@ -69,9 +69,11 @@ def section(documents, out):
     out.append("T_c median and regret come from a final verification in which every distinct "
                "choice (the methods', the classic formulas' and the model's best schedule of each "
                "structure it priced, rows \"model: structure\") is timed once per round, in a new "
-               "random order each round. Regret = median of the per-round ratios to the fastest "
-               "verified choice − 1; \"vs exhaustive\" = the same against the exhaustive best "
-               "(the issue's target); brackets: 95% intervals of those medians. Cost = seconds the "
+               "random order each round. Regret, as the files define it: " +
+               "; ".join(sorted({str(t.get("verification", {}).get("regret_against", "not recorded"))
+                                 for t in documents.values()})) +
+               ". \"vs exhaustive\" = the median of the per-round ratios to the exhaustive best − 1 "
+               "(the issue's target); brackets: 95% intervals. Cost = seconds the "
                "method spent choosing (the search's includes the screening and the model it is "
                "seeded by); timed runs = runs on the scene.\n")
     rows = []
