@@ -1,5 +1,6 @@
 // Statistics of repeated timings: median, extremes, a distribution-free confidence interval of
-// the median, load imbalance, and the repetition driver (warm-up, fixed or adaptive count).
+// the median, paired and per-round comparisons, load imbalance, and the repetition driver
+// (warm-up, fixed or adaptive count).
 #pragma once
 
 #include <cstddef>
