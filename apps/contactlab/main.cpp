@@ -55,7 +55,11 @@ int main(int argc, char** argv) {  // NOLINT(bugprone-exception-escape)
     return 0;  // unreachable: exactly one subcommand is required
   } catch (const CLI::ParseError& e) {
     if (quiet_mpi_rank(argc, argv)) return e.get_exit_code();
-    return app.exit(e);
+    if (e.get_exit_code() == 0) return app.exit(e);  // --help
+    // One line and exit status 2, as every other input error (CLI11's own exit printed a
+    // second line and returned its codes 101 - 116).
+    fmt::print(stderr, "contactlab: error: {} (see --help)\n", e.what());
+    return 2;
   } catch (const contactlab::ReportedElsewhere&) {
     return 2;  // another MPI process printed the message
   } catch (const contactlab::InputError& e) {

@@ -60,16 +60,13 @@ void TuneCommand::add_to(CLI::App& sub) {
                  "orders to screen, comma-separated (sorted, morton, unsorted)");
   sub.add_option("--grids", grids_,
                  "cell indexes to screen, comma-separated: auto (default), dense, hashed");
-  sub.add_option("--search-samples", search_samples_, "timed runs per chunk the search evaluates")
-      ->check(CLI::PositiveNumber);
+  sub.add_option("--search-samples", search_samples_, "timed runs per chunk the search evaluates");
   sub.add_option("--exhaustive-rounds", exhaustive_rounds_,
-                 "rounds over the chunk grid in the exhaustive sweep (one run per chunk each)")
-      ->check(CLI::PositiveNumber);
+                 "rounds over the chunk grid in the exhaustive sweep (one run per chunk each)");
   verify_rounds_option_ =
       sub.add_option("--verify-rounds", verify_rounds_,
                      "rounds of the final verification (every choice timed once per round; "
-                     "--dem: 3 unless given)")
-          ->check(CLI::PositiveNumber);
+                     "--dem: 3 unless given)");
   mpi_.add_to(sub,
               "tune each MPI rank's part (under mpirun): replicated (the paper) or decomposed");
   sub.add_option("--dem", dem_.config,
@@ -83,6 +80,10 @@ void TuneCommand::add_to(CLI::App& sub) {
 void TuneCommand::check() const {
   if (threads_ < 0) throw InputError("--threads must be >= 0");
   if (max_chunk_ < 1) throw InputError("--max-chunk must be >= 1");
+  // Here, not by CLI11's PositiveNumber, whose message printed the range up to DBL_MAX in full.
+  if (search_samples_ < 1) throw InputError("--search-samples must be >= 1");
+  if (exhaustive_rounds_ < 1) throw InputError("--exhaustive-rounds must be >= 1");
+  if (verify_rounds_ < 1) throw InputError("--verify-rounds must be >= 1");
 }
 
 tn::TuneOptions TuneCommand::options() const {

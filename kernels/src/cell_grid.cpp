@@ -16,7 +16,7 @@ CellGrid::CellGrid(const Box& box, double min_width, CellNumbering numbering)
     : numbering_(numbering) {
   if (!(min_width > 0.0) || !std::isfinite(min_width)) {
     throw InputError("cell width (diameter D) must be a positive finite number, got " +
-                     std::to_string(min_width));
+                     number_text(min_width));
   }
   const int axis_limit = numbering == CellNumbering::kLinear ? kMaxAxisCells : kMaxMortonAxisCells;
   double cells = 1.0;
@@ -33,7 +33,7 @@ CellGrid::CellGrid(const Box& box, double min_width, CellNumbering numbering)
     const double width = min_width * (1.0 + widening);
     const double per_axis = std::floor(extent / width);
     if (per_axis > double(axis_limit)) {
-      throw InputError("cell grid too large: D = " + std::to_string(min_width) +
+      throw InputError("cell grid too large: D = " + number_text(min_width) +
                        " is too small for the box (more than " + std::to_string(axis_limit) +
                        " cells along one axis" +
                        (numbering == CellNumbering::kMorton ? " with Morton numbering)" : ")"));
@@ -48,7 +48,7 @@ CellGrid::CellGrid(const Box& box, double min_width, CellNumbering numbering)
     if (cells > 0x1.0p62) {  // keys and key + 1 stay far from overflow
       throw InputError("cell grid too large: " + std::to_string(dims_[0]) + "x" +
                        std::to_string(dims_[1]) + "x" + std::to_string(dims_[2]) +
-                       " cells exceed 2^62 keys (D = " + std::to_string(min_width) +
+                       " cells exceed 2^62 keys (D = " + number_text(min_width) +
                        " is too small for the box)");
     }
     key_count_ = cell_count();

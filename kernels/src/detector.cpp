@@ -256,7 +256,7 @@ CellGrid ContactDetector::prepare(const Scene& scene, const DetectOptions& optio
   const bool diameters = scene.has_diameters();
   if (!diameters && !(options.diameter > 0.0 && options.diameter < 1e300)) {
     throw InputError("diameter D must be a positive finite number (got " +
-                     std::to_string(options.diameter) + ")");
+                     number_text(options.diameter) + ")");
   }
   const Schedule& schedule = options.variant.schedule;
   if (schedule.chunk < 0 || (schedule.kind != ScheduleKind::kStatic && schedule.chunk == 0)) {
@@ -399,7 +399,7 @@ DetectRun ContactDetector::run(const Scene& scene, const DetectOptions& options)
 ContactList ContactDetector::neighbor_list(const Scene& scene, const DetectOptions& options,
                                            double skin) {
   if (!(skin >= 0.0 && skin < 1e300)) {
-    throw InputError("skin must be a finite number >= 0 (got " + std::to_string(skin) + ")");
+    throw InputError("skin must be a finite number >= 0 (got " + number_text(skin) + ")");
   }
   DetectOptions full = options;
   full.variant.stencil = Stencil::kFull;

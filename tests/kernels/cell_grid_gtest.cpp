@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdlib>
 #include <limits>
 #include <set>
 #include <vector>
@@ -69,6 +70,12 @@ TEST(CellGrid, RejectsBadWidths) {
   EXPECT_TRUE(CellGrid(Box{}, 1.0 / 512, CellNumbering::kMorton).dense_fits());
   // The limits are per axis: 2^30 cells (linear), 2^21 (Morton, 21 key bits an axis).
   EXPECT_THROW(CellGrid(Box{}, 1e-300, CellNumbering::kLinear), InputError);
+  // The message names D as given (std::to_string's six decimals printed "0.000000").
+  try {
+    CellGrid(Box{}, 1e-300, CellNumbering::kLinear);
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("D = 1e-300 "), std::string::npos) << e.what();
+  }
   EXPECT_THROW(CellGrid(Box{}, 1e-7, CellNumbering::kMorton), InputError);
   EXPECT_NO_THROW(CellGrid(Box{}, 1e-6, CellNumbering::kMorton));
   const Box thin{{0, 0, 0}, {double(CellGrid::kMaxKeys * 2), 1, 1}};
@@ -78,6 +85,16 @@ TEST(CellGrid, RejectsBadWidths) {
   // Linear keys must fit in 62 bits: 2^21 x 2^21 x 2^21 cells do not.
   const Box cube{{0, 0, 0}, {0x1.0p21 + 1, 0x1.0p21 + 1, 0x1.0p21 + 1}};
   EXPECT_THROW(CellGrid(cube, 1.0, CellNumbering::kLinear), InputError);
+}
+
+TEST(NumberText, IsTheShortestTextThatReadsBack) {
+  EXPECT_EQ(number_text(0.005), "0.005");
+  EXPECT_EQ(number_text(1e-300), "1e-300");
+  EXPECT_EQ(number_text(-1.0), "-1");
+  EXPECT_EQ(number_text(std::numeric_limits<double>::infinity()), "inf");
+  for (const double v : {0.1 + 0.2, 1.0 / 3.0, 6.02214076e23, 5e-324}) {
+    EXPECT_EQ(std::strtod(number_text(v).c_str(), nullptr), v) << number_text(v);
+  }
 }
 
 TEST(CellGrid, WideKeysAreTheKeysWhereBothExist) {

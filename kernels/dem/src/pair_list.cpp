@@ -128,8 +128,8 @@ RebuildStats NeighborBuilder::rebuild(Particles& p, PairList& pairs, const Domai
     if (!domain.periodic[a]) continue;
     if (domain.length(a) < 3.0 * reach) {
       throw InputError("periodic length along axis " + std::to_string(a) + " (" +
-                       std::to_string(domain.length(a)) + " m) is under 3 pair reaches (" +
-                       std::to_string(3.0 * reach) + " m)");
+                       number_text(domain.length(a)) + " m) is under 3 pair reaches (" +
+                       number_text(3.0 * reach) + " m)");
     }
     std::vector<double>& c = a == 0 ? p.x : a == 1 ? p.y : p.z;
     const double lo = domain.lo[a], len = domain.length(a);

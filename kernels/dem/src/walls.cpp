@@ -81,7 +81,7 @@ void validate_wall(Wall& wall, const std::string& where) {
   for (double& v : wall.normal) v /= n;
   if ((wall.kind == WallKind::kCylinder || wall.kind == WallKind::kOrificePlate) &&
       !(wall.radius > 0)) {
-    throw InputError(where + ": radius must be > 0 m (got " + std::to_string(wall.radius) + ")");
+    throw InputError(where + ": radius must be > 0 m (got " + number_text(wall.radius) + ")");
   }
   if (wall.kind == WallKind::kCone &&
       !(wall.half_angle_rad > 0 && wall.half_angle_rad < std::numbers::pi / 2)) {

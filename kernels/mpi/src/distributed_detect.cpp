@@ -63,7 +63,7 @@ std::vector<Particle> particles_of(const Scene& scene, std::uint64_t first, std:
 void check_diameter(const DetectOptions& options, bool diameters) {
   if (!diameters && !(options.diameter > 0.0 && std::isfinite(options.diameter))) {
     throw InputError("diameter D must be a positive finite number (got " +
-                     std::to_string(options.diameter) + ")");
+                     number_text(options.diameter) + ")");
   }
 }
 
@@ -186,8 +186,8 @@ void prepare_decomposed(MPI_Comm comm, const SceneSource& source, const DetectOp
       throw InputError("--halo must be a finite number >= 0");
     }
     if (mpi.halo > 0.0 && mpi.halo < reach) {
-      throw InputError("--halo " + std::to_string(mpi.halo) + " is below the contact distance " +
-                       std::to_string(reach));
+      throw InputError("--halo " + number_text(mpi.halo) + " is below the contact distance " +
+                       number_text(reach));
     }
     grid.emplace(box, width, CellNumbering::kLinear);
     if (!grid->dense_fits()) {  // the partition's histogram has an entry per cell

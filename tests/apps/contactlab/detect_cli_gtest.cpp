@@ -117,6 +117,7 @@ void expect_rejected(const std::string& options, const std::string& message) {
   EXPECT_EQ(r.exit_code, 2) << r.output;
   EXPECT_NE(r.output.find("contactlab: error: "), std::string::npos) << r.output;
   EXPECT_NE(r.output.find(message), std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find("Run with --help"), std::string::npos) << r.output;
   EXPECT_FALSE(std::filesystem::exists(json)) << "a result file was written for bad input";
 }
 
@@ -124,6 +125,14 @@ TEST(DetectCli, BadInputIsOneClearError) {
   expect_rejected("--cache-sim custom:48K,8,64:1M,16,64", "not a power of two");
   expect_rejected("--cache-sim sparc", "unknown cache geometry 'sparc'");
   expect_rejected("--adaptive --target-ci 2", "--target-ci");
+  // Parse errors too: one line (CLI11's own exit added "Run with --help ..." and exit 105 - 109).
+  expect_rejected("--no-such-option", "--no-such-option");
+  expect_rejected("--repeat many", "many");
+  // Numbers in messages as given, not as std::to_string's six decimals (0.000000).
+  const auto tiny = test::run_command(test::contactlab_exe() +
+                                      " detect --scene uniform --n 100 -D 1e-300 --repeat 1");
+  EXPECT_EQ(tiny.exit_code, 2) << tiny.output;
+  EXPECT_NE(tiny.output.find("D = 1e-300 is too small"), std::string::npos) << tiny.output;
   if (papi_info().initialized)
     expect_rejected("--papi-events PAPI_NOT_AN_EVENT_XYZ", "unknown PAPI event");
 }

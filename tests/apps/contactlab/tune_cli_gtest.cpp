@@ -129,6 +129,17 @@ TEST(TuneCli, ThreadsZeroFollowsOmpNumThreadsInTuneAndVariantAuto) {
   EXPECT_EQ(detected.output.find("no cached choice"), std::string::npos) << detected.output;
 }
 
+TEST(TuneCli, RoundsBelowOneAreAClearError) {
+  for (const char* option : {"--verify-rounds", "--search-samples", "--exhaustive-rounds"}) {
+    const auto r =
+        run_command(contactlab_exe() + " tune --scene uniform --n 1000 -D 0.05 " + option + " 0");
+    EXPECT_EQ(r.exit_code, 2) << r.output;
+    EXPECT_NE(r.output.find(std::string("contactlab: error: ") + option + " must be >= 1"),
+              std::string::npos)
+        << r.output;
+  }
+}
+
 TEST(TuneCli, CorruptCacheIsAClearError) {
   const std::string dir = temp_dir("tune_corrupt");
   std::ofstream(dir + "/tuning.json") << "{ broken";

@@ -8,6 +8,8 @@
 #include <optional>
 #include <stdexcept>
 
+#include "contactlab/kernels/error.hpp"
+
 namespace contactlab::tuner {
 
 namespace {
@@ -169,7 +171,7 @@ CalibrationResult calibrate_costs(std::span<const TimedRun> runs, const MachineC
     if (run.threads < 1 || !std::isfinite(run.seconds) || run.seconds <= 0.0) {
       throw std::invalid_argument("calibrate_costs: run " + std::to_string(i) +
                                   " has threads = " + std::to_string(run.threads) +
-                                  ", seconds = " + std::to_string(run.seconds) +
+                                  ", seconds = " + number_text(run.seconds) +
                                   " (need threads >= 1 and seconds > 0)");
     }
     const Schedule& s = run.schedule;

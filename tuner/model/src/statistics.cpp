@@ -53,7 +53,7 @@ double order_statistic_coverage(std::size_t n, std::size_t k) {
 
 MedianInterval median_interval(std::span<const double> values, double level) {
   if (!(level > 0.0 && level < 1.0)) {
-    throw InputError("median_interval: level must be in (0, 1), got " + std::to_string(level));
+    throw InputError("median_interval: level must be in (0, 1), got " + number_text(level));
   }
   const std::vector<double> sorted = sorted_copy(values, "median_interval");
   const std::size_t n = sorted.size();
@@ -155,7 +155,7 @@ RoundSlowdowns::RoundSlowdowns(const std::vector<std::vector<double>>& samples) 
 RoundSlowdowns::Ratio RoundSlowdowns::relative(std::size_t c, std::size_t reference, double level,
                                                int resamples) const {
   if (!(level > 0.0 && level < 1.0) || resamples < 1) {
-    throw InputError("round slowdowns: level " + std::to_string(level) + " and " +
+    throw InputError("round slowdowns: level " + number_text(level) + " and " +
                      std::to_string(resamples) + " resamples (need a level in (0, 1), >= 1)");
   }
   const std::vector<double>& of_c = to_round_fastest_.at(c);

@@ -1,6 +1,7 @@
 // Errors that carry a one-line message meant for the user (bad input, bad options).
 #pragma once
 
+#include <charconv>
 #include <stdexcept>
 #include <string>
 
@@ -12,6 +13,14 @@ class InputError : public std::runtime_error {
  public:
   explicit InputError(const std::string& message) : std::runtime_error(message) {}
 };
+
+// A double as its shortest text that reads back to the same value ("1e-05", "0.005", "inf"),
+// for messages: std::to_string's fixed six decimals printed D = 1e-300 as "0.000000".
+inline std::string number_text(double value) {
+  char text[32];
+  const auto result = std::to_chars(text, text + sizeof text, value);
+  return {text, result.ptr};
+}
 
 }  // namespace contactlab
 
