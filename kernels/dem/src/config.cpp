@@ -28,8 +28,12 @@ double number(ObjectIn& o, const std::string& key, std::optional<double> fallbac
   double v = 0;
   tuner::read(*in, v);
   if (!std::isfinite(v) || v > high || (low_open ? v <= low : v < low)) {
-    in->fail(std::string("must be in ") + (low_open ? "(" : "[") + json(low).dump() + ", " +
-             json(high).dump() + "], got " + in->value().dump());
+    // No upper bound worth printing where `high` is kHuge: "must be > 0", not "(0.0, 1e+300]".
+    const std::string bound = high >= kHuge
+                                  ? std::string(low_open ? "> " : ">= ") + number_text(low)
+                                  : std::string("in ") + (low_open ? "(" : "[") + number_text(low) +
+                                        ", " + number_text(high) + "]";
+    in->fail("must be " + bound + ", got " + in->value().dump());
   }
   return v;
 }
