@@ -138,7 +138,8 @@ def build(results_dir):
                   lambda out: validation_section(
                       paper.validation_rows(emulation) + dem.validation_rows(profile)
                       + mpi.validation_rows(model), threads_against_sweep(threads), out),
-                  lambda out: benchmark.section(optional(results_dir, "benchmark.json"), out)):
+                  lambda out: benchmark.section(optional(results_dir, "benchmark.json"), out),
+                  lambda out: benchmark.search_section(optional(results_dir, "neighbour-search.json"), out)):
         out = []
         write(out)
         sections.append(out)

@@ -211,6 +211,12 @@ class ReportOnFixture(unittest.TestCase):
         for line in rows:
             self.assertIn("factoring k = 512: *+25.0%*†", line)
 
+    def test_against_nanoflann_gives_the_ratio_of_medians(self):
+        self.assertIn("**0 rows differ**", self.report)
+        # The fixture's best leaf size at each thread count against the detector's median.
+        self.assertIn("threads 1: nanoflann's best leaf size (24) / contactlab = **20.0x**", self.report)
+        self.assertIn("threads 2: nanoflann's best leaf size (24) / contactlab = **26.4x**", self.report)
+
     def test_figures_exist(self):
         for name in ("fig8_speedup.png", "fig9_mpi_speedup.png", "fig10_mpi_efficiency.png",
                      "chunk_study.png", "dem_speedup.png"):
@@ -294,6 +300,11 @@ class ReportOnDamagedInput(unittest.TestCase):
     def test_missing_aggregate_names_run(self):
         self.edit("paper-tables.json", lambda d: d["runs"][1]["aggregates"]["total_s"].pop("median"))
         self.assert_fails_naming("paper-tables.json", "$.runs[1].aggregates.total_s.median")
+
+    def test_differing_contact_lists_fail(self):
+        self.edit("neighbour-search.json",
+                  lambda d: d["context"].update(rows_differing_from_nanoflann="3"))
+        self.assert_fails_naming("neighbour-search.json", "$.context.rows_differing_from_nanoflann")
 
     def test_wrong_kind(self):
         self.edit("dem-profile.json", lambda d: d.update(kind="something-else"))
