@@ -3,16 +3,27 @@ speed targets of the foundation issue, as ratios within that one run."""
 from .common import SchemaError, load_json, reading, table
 
 
-def section(path, out):
-    out.append("\n## Kernel benchmark (Google Benchmark, N = 1,024,000, D = 1/200, clustered)\n")
+def _google_benchmark(path, name, title, out):
+    """Writes the section's title; returns Google Benchmark's JSON at path (file `name`) and its
+    context, or None after "Not run" where the file is absent."""
+    out.append(f"\n## {title}\n")
     if path is None:
-        out.append("Not run (no benchmark.json).")
-        return
+        out.append(f"Not run (no {name}).")
+        return None
     b = load_json(path)
     with reading(path):
         if not isinstance(b.get("benchmarks"), list):
             raise SchemaError("$.benchmarks: missing")
-        ctx = b.get("context", {})
+    return b, b.get("context", {})
+
+
+def section(path, out):
+    loaded = _google_benchmark(path, "benchmark.json", "Kernel benchmark (Google Benchmark, "
+                               "N = 1,024,000, D = 1/200, clustered)", out)
+    if loaded is None:
+        return
+    b, ctx = loaded
+    with reading(path):
         out.append(f"{ctx.get('host_name', '?')}, {ctx.get('num_cpus', '?')} CPUs, {ctx.get('date', '?')}. "
                    "Time = T_ALL per iteration (manual time, mean of the iterations; Google "
                    "Benchmark gives no interval).\n")
@@ -52,15 +63,13 @@ def section(path, out):
 def search_section(path, out):
     """The detector against nanoflann's k-d tree (neighbour-search.json: Google Benchmark,
     random interleaving, medians over repetitions): T_ALL and the ratio per thread count."""
-    out.append("\n## Against nanoflann (k-d tree radius search, N = 1,024,000, D = 1/200, clustered)\n")
-    if path is None:
-        out.append("Not run (no neighbour-search.json).")
+    loaded = _google_benchmark(path, "neighbour-search.json",
+                               "Against nanoflann (k-d tree radius search, N = 1,024,000, "
+                               "D = 1/200, clustered)", out)
+    if loaded is None:
         return
-    b = load_json(path)
+    b, ctx = loaded
     with reading(path):
-        if not isinstance(b.get("benchmarks"), list):
-            raise SchemaError("$.benchmarks: missing")
-        ctx = b.get("context", {})
         if str(ctx.get("rows_differing_from_nanoflann")) != "0":
             raise SchemaError("$.context.rows_differing_from_nanoflann: not 0 (the contact lists differ)")
         medians = {}

@@ -16,25 +16,13 @@
 #include <string>
 
 #include "contactlab/kernels/detector.hpp"
-#include "contactlab/kernels/scene_generate.hpp"
 #include "contactlab/kernels/simd.hpp"
+#include "paper_scene.hpp"
 
 namespace cl = contactlab;
+using contactlab::benchmarks::paper_scene;
 
 namespace {
-
-const cl::Scene& paper_scene() {
-  static const cl::Scene scene = [] {
-    cl::SceneSpec spec;
-    spec.kind = cl::SceneKind::kClustered;
-    spec.n = 1'024'000;
-    if (const char* n = std::getenv("CONTACTLAB_BENCH_N")) spec.n = std::strtoull(n, nullptr, 10);
-    spec.diameter = 1.0 / 200.0;
-    spec.seed = 1;
-    return cl::generate_scene(spec);
-  }();
-  return scene;
-}
 
 // Peak resident memory of the process while one benchmark runs: VmHWM of /proc/self/status,
 // reset at the benchmark's start by writing "5" to /proc/self/clear_refs (Linux >= 4.0).
@@ -72,7 +60,8 @@ void detect_variant(benchmark::State& state, cl::Variant variant) {
   const cl::Scene& scene = paper_scene();
   const bool was_reset = reset_peak_rss();
   cl::ContactDetector detector;
-  const cl::DetectOptions options{variant, 1.0 / 200.0, static_cast<int>(state.range(0)), nullptr};
+  const cl::DetectOptions options{variant, cl::benchmarks::kPaperDiameter,
+                                  static_cast<int>(state.range(0)), nullptr};
   detector.run(scene, options);  // warm-up: buffers and pages
   double setup = 0.0, detect = 0.0;
   std::uint64_t tests = 0, contacts = 0;

@@ -19,32 +19,20 @@
 
 #include "contactlab/kernels/build_info.hpp"
 #include "contactlab/kernels/detector.hpp"
-#include "contactlab/kernels/scene_generate.hpp"
 #include "contactlab/kernels/simd.hpp"
 #include "nanoflann_baseline.hpp"
+#include "paper_scene.hpp"
 
 namespace cl = contactlab;
+using contactlab::benchmarks::paper_scene;
 
 namespace {
 
-constexpr double kDiameter = 1.0 / 200.0;
+constexpr double kDiameter = cl::benchmarks::kPaperDiameter;
 // The detector's fastest variant on this scene at 1 and 2 threads (docs/architecture.md).
 const char* const kVariant = "particle/sorted/full/static";
 // nanoflann's default leaf size and the one that ran fastest here on the paper scene.
 constexpr std::int64_t kLeafSizes[] = {10, 24};
-
-const cl::Scene& paper_scene() {
-  static const cl::Scene scene = [] {
-    cl::SceneSpec spec;
-    spec.kind = cl::SceneKind::kClustered;
-    spec.n = 1'024'000;
-    if (const char* n = std::getenv("CONTACTLAB_BENCH_N")) spec.n = std::strtoull(n, nullptr, 10);
-    spec.diameter = kDiameter;
-    spec.seed = 1;
-    return cl::generate_scene(spec);
-  }();
-  return scene;
-}
 
 // The rows that differ between the two canonical contact lists (0 where they are equal).
 std::uint64_t rows_differing(const cl::ContactList& a, const cl::ContactList& b) {
