@@ -4,7 +4,9 @@
 #include <fmt/ranges.h>
 
 #include <algorithm>
-#include <deque>
+#include <map>
+#include <memory>
+#include <optional>
 #include <set>
 
 #include "contactlab/kernels/error.hpp"
@@ -34,6 +36,28 @@ namespace {
 
 struct Samples {
   std::vector<double> setup, detect, total;
+};
+
+// A chunked deal's locality, timed here: thread 0's share of variant `variant`'s loop under
+// static,chunk at `threads` threads (the block-cyclic deal; dynamic,chunk deals about the same),
+// run alone at one thread on the scene.
+struct ShareKey {
+  std::size_t variant;
+  int chunk, threads;
+  auto operator<=>(const ShareKey&) const = default;
+};
+
+bool dealt_in_chunks(const Schedule& schedule) {
+  return schedule.kind != ScheduleKind::kGuided &&
+         !(schedule.kind == ScheduleKind::kStatic && schedule.chunk == 0);
+}
+
+// Per variant: its trace and the calibrated costs of its structure.
+struct VariantModel {
+  LoopWork work;
+  std::unique_ptr<PreparedWork> prepared;  // views `work`
+  MachineCosts costs;
+  const std::vector<OutputCost>* output_costs = nullptr;
 };
 
 }  // namespace
@@ -70,14 +94,70 @@ ThreadEmulation emulate_threads(const Scene& scene, double diameter,
                                 const Calibration& calibration) {
   validate(options);
   const std::vector<int>& measured_threads = options.measured_threads;
-  // Timed runs on the scene, interleaved: round r runs every variant at every measured count
-  // once, so a slow spell of the machine touches all of them alike.
   DetectionKernel kernel(scene, diameter);
+  const std::vector<OutputCost> no_output_costs;
+  std::vector<VariantModel> models(options.variants.size());
+  for (std::size_t i = 0; i < options.variants.size(); ++i) {
+    VariantModel& m = models[i];
+    m.work = kernel.iteration_work(options.variants[i], 1);
+    m.prepared =
+        std::make_unique<PreparedWork>(WorkView{m.work.tests, m.work.homes, m.work.builds});
+    const auto found = calibration.structures.find(structure_key(options.variants[i]));
+    const bool calibrated = found != calibration.structures.end();
+    m.costs = calibrated ? found->second.costs : MachineCosts{};
+    m.output_costs = calibrated ? &found->second.output : &no_output_costs;
+  }
+  // The chunk study's loop: the paper's Table 7 loop (the first particle/sorted/full variant).
+  std::optional<std::size_t> table7;
+  for (std::size_t i = 0; i < options.variants.size() && !table7; ++i) {
+    const Variant& v = options.variants[i];
+    if (v.loop == LoopKind::kParticle && v.order == Order::kSorted && v.stencil == Stencil::kFull)
+      table7 = i;
+  }
+  auto classic_of = [&](int threads) {
+    return classic_chunks(models[*table7].prepared->view(), threads, models[*table7].costs);
+  };
+  // Every chunked deal the emulation prices gets its thread 0's share timed alone (below).
+  std::map<ShareKey, std::vector<double>> shares;
+  for (std::size_t i = 0; i < options.variants.size(); ++i) {
+    const Schedule& schedule = options.variants[i].schedule;
+    if (!dealt_in_chunks(schedule)) continue;
+    for (const auto* counts : {&options.threads, &measured_threads}) {
+      for (const int t : *counts) {
+        if (t > 1) shares[{i, schedule.chunk, t}];
+      }
+    }
+  }
+  if (table7) {
+    for (const int t : options.chunk_threads) {
+      if (t <= 1) continue;
+      for (const int chunk : options.chunk_grid) shares[{*table7, chunk, t}];
+      for (const NamedChunk& c : classic_of(t)) shares[{*table7, c.chunk, t}];
+    }
+  }
+
+  // Timed runs on the scene, interleaved: round r runs every variant at every measured count
+  // once, and every share alone once, so that a slow spell of the machine touches all alike.
+  // The shares run on one kernel of their own (its buffers reused, none faulted in anew); a
+  // share with no block of the loop times what visiting the blocks costs by itself, which a
+  // thread of a real run does not pay.
   std::vector<std::vector<Samples>> samples(options.variants.size(),
                                             std::vector<Samples>(measured_threads.size()));
+  DetectionKernel share_kernel(scene, diameter);
+  std::vector<std::vector<double>> no_share(options.variants.size());
+  auto share_loop_s = [&](const Variant& variant, const HomeBlocks& blocks) {
+    share_kernel.set_blocks(blocks);
+    const KernelRun run = share_kernel.run(variant, 1);
+    return run.phase_s("detect") - run.phase_s("assembly");
+  };
+  auto no_block = [&](std::size_t i) {
+    const auto iterations = static_cast<std::uint32_t>(models[i].work.tests.size());
+    return HomeBlocks{1, iterations + 2, iterations + 1};
+  };
   for (const Variant& v : options.variants) {
     for (const int t : measured_threads) kernel.run(v, t);  // warm-up: first touches
   }
+  if (!shares.empty()) share_kernel.run(options.variants[shares.begin()->first.variant], 1);
   for (int round = 0; round < options.rounds; ++round) {
     for (std::size_t i = 0; i < options.variants.size(); ++i) {
       for (std::size_t j = 0; j < measured_threads.size(); ++j) {
@@ -87,6 +167,16 @@ ThreadEmulation emulate_threads(const Scene& scene, double diameter,
         s.detect.push_back(run.phase_s("detect"));
         s.total.push_back(s.setup.back() + s.detect.back());
       }
+    }
+    std::set<std::size_t> with_shares;
+    for (auto& [key, loop_s] : shares) {
+      const HomeBlocks blocks{static_cast<std::uint32_t>(key.chunk),
+                              static_cast<std::uint32_t>(key.threads), 0};
+      loop_s.push_back(share_loop_s(options.variants[key.variant], blocks));
+      with_shares.insert(key.variant);
+    }
+    for (const std::size_t i : with_shares) {
+      no_share[i].push_back(share_loop_s(options.variants[i], no_block(i)));
     }
   }
 
@@ -109,10 +199,9 @@ ThreadEmulation emulate_threads(const Scene& scene, double diameter,
   ThreadEmulation result;
   result.calibration = calibration;
   const OutputEstimate output = kernel.estimated_output();
-  std::deque<LoopWork> works;  // kept alive: PreparedWork holds views
-  std::deque<PreparedWork> prepared;
   for (std::size_t i = 0; i < options.variants.size(); ++i) {
     const Variant& variant = options.variants[i];
+    const VariantModel& model = models[i];
     VariantEmulation e;
     e.variant = variant;
     for (std::size_t j = 0; j < measured_threads.size(); ++j) {
@@ -128,64 +217,79 @@ ThreadEmulation emulate_threads(const Scene& scene, double diameter,
         measured_threads[most] > 1
             ? AmdahlPhase::fit(setup_one, measured_threads[most], pooled_setup(variant, most))
             : AmdahlPhase::serial(setup_one);
-    works.push_back(kernel.iteration_work(variant, 1));
-    prepared.emplace_back(WorkView{works.back().tests, works.back().homes, works.back().builds});
-    const auto found = result.calibration.structures.find(structure_key(variant));
-    const MachineCosts costs =
-        found != result.calibration.structures.end() ? found->second.costs : MachineCosts{};
     // The rows copied after the loop (output_cost.hpp): the calibrated cost per entry times
     // the share of the entries the schedule leaves to copy at t threads. The full stencil at
     // one thread writes its rows in place and copies none, but under a chunked schedule at two
     // or more threads it copies them all: the one-thread anchor holds no copy to scale.
-    const std::vector<OutputCost> none;
-    const std::vector<OutputCost>& output_costs =
-        found != result.calibration.structures.end() ? found->second.output : none;
     auto output_s = [&](int threads, const Schedule& schedule) {
-      return output_seconds(output_costs, output, threads) *
+      return output_seconds(*model.output_costs, output, threads) *
              kernel.copied_output_share(with_schedule(variant, schedule.kind, schedule.chunk),
                                         threads);
-    };
-    auto detect_s = [&](const AnchoredLoop& anchored, int threads, const Schedule& schedule) {
-      return anchored.seconds(threads, schedule) + output_s(threads, schedule);
     };
     // The loop alone is anchored: the measured one-thread T_c less its copy.
     const double loop_one =
         std::max(one.detect_s.median - output_s(1, variant.schedule), 0.05 * one.detect_s.median);
-    const AnchoredLoop loop(prepared.back(), costs, variant.schedule, loop_one);
+    const AnchoredLoop loop(*model.prepared, model.costs, variant.schedule, loop_one);
     e.anchor_scale = loop.scale();
+    // A chunked deal's locality factor at t threads: thread 0's share timed alone (less the
+    // visit of the blocks by itself) over its anchored replay. A thread that jumps to its next
+    // chunk finds little of the stencil's data in its caches, where the one-thread sweep had
+    // brought it for a neighbouring cell: on the paper's scene such a share ran 1.1 - 1.3x its
+    // replay, which the calibration scenes (cached whole) never show.
+    auto locality = [&](const Schedule& schedule, int threads) {
+      if (threads <= 1 || !dealt_in_chunks(schedule)) return 1.0;
+      const auto found = shares.find({i, schedule.chunk, threads});
+      if (found == shares.end()) return 1.0;
+      const RankWork share = replicated_rank_work(
+          model.prepared->view(), static_cast<std::uint32_t>(schedule.chunk), threads, 0);
+      const double replayed =
+          loop.scale() *
+          (simulate_schedule(share.view(), 1, Schedule{}, model.costs).makespan_seconds -
+           model.costs.seconds_per_region);
+      const double measured = median(found->second) - median(no_share[i]);
+      return replayed > 0.0 && measured > 0.0 ? measured / replayed : 1.0;
+    };
+    auto loop_s = [&](int threads, const Schedule& schedule, double factor) {
+      const ScheduleOutcome outcome = loop.replay(threads, schedule);
+      const double region = loop.scale() * model.costs.seconds_per_region;
+      return std::pair{region + factor * (outcome.makespan_seconds - region), outcome.imbalance};
+    };
+    auto detect_s = [&](int threads, const Schedule& schedule) {
+      return loop_s(threads, schedule, locality(schedule, threads)).first +
+             output_s(threads, schedule);
+    };
     for (const int t : options.threads) {
-      const ScheduleOutcome outcome = loop.replay(t, variant.schedule);
+      const double factor = locality(variant.schedule, t);
+      const auto [seconds, balance] = loop_s(t, variant.schedule, factor);
       const double copy = output_s(t, variant.schedule);
-      e.emulated.push_back(
-          {t, setup.at(t), outcome.makespan_seconds + copy, 0.0, outcome.imbalance, copy});
+      e.emulated.push_back({t, setup.at(t), seconds + copy, 0.0, balance, copy, factor});
     }
-    const double one_thread_total = setup.at(1) + detect_s(loop, 1, variant.schedule);
+    const double one_thread_total = setup.at(1) + detect_s(1, variant.schedule);
     for (EmulatedThreads& point : e.emulated) point.speedup = one_thread_total / point.total_s();
     for (const MeasuredThreads& m : e.measured) {
       if (m.threads == 1) continue;
-      const double detect = detect_s(loop, m.threads, variant.schedule);
+      // The check at the machine's cores: its own share's locality, timed alone like the rest.
+      const double detect = detect_s(m.threads, variant.schedule);
       e.checks.push_back(
           {m.threads, m.total_s.median, setup.at(m.threads) + detect, m.detect_s.median, detect});
     }
-    // The chunk study on the paper's Table 7 loop (the first particle/sorted/full variant).
-    const bool table7_loop = variant.loop == LoopKind::kParticle &&
-                             variant.order == Order::kSorted && variant.stencil == Stencil::kFull;
-    if (table7_loop && result.chunk_study.empty()) {
+    if (table7 == i) {
       for (const int t : options.chunk_threads) {
         for (const ScheduleKind kind : {ScheduleKind::kDynamic, ScheduleKind::kStatic}) {
           EmulatedChunkStudy study;
           study.threads = t;
           study.variant = with_schedule(variant, kind, 1);
-          study.block_detect_s = detect_s(loop, t, {ScheduleKind::kStatic, 0});
+          study.block_detect_s = detect_s(t, {ScheduleKind::kStatic, 0});
           if (kind == ScheduleKind::kDynamic) {
-            for (const NamedChunk& c : classic_chunks(prepared.back().view(), t, costs)) {
+            for (const NamedChunk& c : classic_of(t)) {
               study.classic.push_back(
-                  {c.name, c.chunk, detect_s(loop, t, {ScheduleKind::kDynamic, c.chunk})});
+                  {c.name, c.chunk, detect_s(t, {ScheduleKind::kDynamic, c.chunk})});
             }
           }
           for (const int chunk : options.chunk_grid) {
-            const double s = detect_s(loop, t, {kind, chunk});
+            const double s = detect_s(t, {kind, chunk});
             study.detect_s.emplace_back(chunk, s);
+            study.locality.emplace_back(chunk, locality({kind, chunk}, t));
             if (study.best_chunk == 0 || s < study.best_detect_s) {
               study.best_chunk = chunk;
               study.best_detect_s = s;
@@ -215,7 +319,11 @@ nlohmann::json emulation_document(const ThreadEmulation& emulation,
       "priced by machine costs calibrated on small calibration scenes (not this one) at up to "
       "{} threads, scaled so that the one-thread replay equals this scene's measured one-thread "
       "T_c less its output copy, then replayed under the variant's schedule as libgomp deals it "
-      "(static, static,k, dynamic,k, guided,k), plus the rows the schedule leaves to copy after "
+      "(static, static,k, dynamic,k, guided,k); a deal in chunks (static,k and dynamic,k) at P "
+      "threads has its loop scaled by a locality factor measured here: thread 0's share of "
+      "static,k at P threads timed alone at one thread, less a run with no block, over its "
+      "replay (the caches and blocks of homes a thread loses by jumping between chunks); plus the "
+      "rows the schedule leaves to copy after "
       "the loop at P threads (the calibrated cost per output entry); T_s = serial + "
       "parallel/P fitted from the measured 1- and "
       "{}-thread T_s. Not modelled: memory bandwidth and shared caches as threads are added, "
@@ -251,7 +359,8 @@ nlohmann::json emulation_document(const ThreadEmulation& emulation,
                                {"total_s", p.total_s()},
                                {"speedup", p.speedup},
                                {"imbalance", p.imbalance},
-                               {"output_s", p.output_s}});
+                               {"output_s", p.output_s},
+                               {"locality_factor", p.locality}});
     }
     v["validation"] = nlohmann::json::array();
     for (const EmulationCheck& c : e.checks) {
@@ -269,8 +378,10 @@ nlohmann::json emulation_document(const ThreadEmulation& emulation,
   doc["chunk_study"] = nlohmann::json::array();
   for (const EmulatedChunkStudy& s : emulation.chunk_study) {
     nlohmann::json points = nlohmann::json::array();
-    for (const auto& [chunk, seconds] : s.detect_s) {
-      points.push_back({{"chunk", chunk}, {"detect_s", seconds}});
+    for (std::size_t k = 0; k < s.detect_s.size(); ++k) {
+      points.push_back({{"chunk", s.detect_s[k].first},
+                        {"detect_s", s.detect_s[k].second},
+                        {"locality_factor", s.locality[k].second}});
     }
     nlohmann::json classic = nlohmann::json::array();
     for (const EmulatedChunkStudy::Classic& c : s.classic) {

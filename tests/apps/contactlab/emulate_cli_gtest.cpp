@@ -57,6 +57,8 @@ TEST(EmulateCli, ThreadsWritesMeasuredEmulatedChecksAndChunks) {
               v["emulated"][1]["detect_s"].get<double>());
     EXPECT_LT(v["emulated"][3]["output_s"].get<double>(),
               v["emulated"][1]["output_s"].get<double>());
+    // Static blocks are not dealt in chunks: no share timed alone, no locality factor.
+    for (const auto& e : v["emulated"]) EXPECT_EQ(e["locality_factor"].get<double>(), 1.0) << e;
     ASSERT_EQ(v["validation"].size(), 1u);
     const auto& c = v["validation"][0];
     EXPECT_EQ(c["threads"], 2);
@@ -75,7 +77,11 @@ TEST(EmulateCli, ThreadsWritesMeasuredEmulatedChecksAndChunks) {
     EXPECT_EQ(s["threads"], 4);
     EXPECT_EQ(s["variant"].get<std::string>().substr(0, 20), "particle/sorted/full");
     double best = 1e300;
-    for (const auto& p : s["points"]) best = std::min(best, p["detect_s"].get<double>());
+    for (const auto& p : s["points"]) {
+      best = std::min(best, p["detect_s"].get<double>());
+      // Every chunk's deal at 4 threads had thread 0's share timed alone: a measured factor.
+      EXPECT_GT(p["locality_factor"].get<double>(), 0.0) << p;
+    }
     EXPECT_DOUBLE_EQ(s["best_detect_s"].get<double>(), best);
     // The classic formulas beside the dynamic study, none faster than its best on the grid
     // unless its chunk is off the grid.

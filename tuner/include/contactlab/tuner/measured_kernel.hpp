@@ -84,6 +84,13 @@ class DetectionKernel final : public MeasuredKernel {
   double copied_output_share(const Variant& variant, int threads) override {
     return contactlab::copied_output_share(variant, threads);
   }
+  // Runs from now on visit only these blocks of the loop (a thread's or a rank's share, timed
+  // alone), with the same buffers: no fresh memory to fault in.
+  void set_blocks(const HomeBlocks& blocks) {
+    blocks_ = blocks;
+    have_reference_ = false;
+    output_.reset();
+  }
 
  private:
   DetectOptions options_for(const Variant& variant, int threads) const;

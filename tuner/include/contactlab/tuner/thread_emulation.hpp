@@ -35,6 +35,9 @@ struct EmulatedThreads {
   int threads = 1;
   double setup_s = 0.0, detect_s = 0.0, speedup = 0.0, imbalance = 0.0;
   double output_s = 0.0;  // of detect_s: the rows copied after the loop
+  // A chunked deal's locality factor on the loop (1: a static block, one thread, or guided):
+  // thread 0's share of the deal timed alone at one thread over its replay (thread_emulation.cpp).
+  double locality = 1.0;
   double total_s() const { return setup_s + detect_s; }
 };
 
@@ -56,6 +59,7 @@ struct EmulatedChunkStudy {
   int threads = 1;
   Variant variant;                               // with the study's kind and a placeholder chunk
   std::vector<std::pair<int, double>> detect_s;  // (chunk, emulated T_c)
+  std::vector<std::pair<int, double>> locality;  // (chunk, locality factor in that T_c)
   int best_chunk = 0;
   double best_detect_s = 0.0;
   double block_detect_s = 0.0;  // static block of the same structure
@@ -85,7 +89,9 @@ TuneOptions structures_for(const std::vector<Variant>& variants);
 
 // Times every variant at options.measured_threads in `rounds` interleaved rounds (one warm-up
 // run each first) and emulates options.threads with the machine costs of `calibration` (fitted
-// on the small calibration scenes, never on this one). Validates the options first.
+// on the small calibration scenes, never on this one). A chunked deal at P threads (the
+// variants' and the chunk study's) is also timed as thread 0's share alone at one thread, in
+// the same rounds: its locality factor. Validates the options first.
 ThreadEmulation emulate_threads(const Scene& scene, double diameter,
                                 const ThreadEmulationOptions& options,
                                 const Calibration& calibration);
