@@ -142,6 +142,19 @@ TEST(EmulateCli, MpiPredictsEverySeriesAndChecksAMeasuredRun) {
     EXPECT_LT(p["slowest_rank"].get<int>(), p["ranks"].get<int>());
   }
   EXPECT_FALSE(doc["series"][1]["points"][0].contains("slowest_rank_measured_s"));
+  // Above one process the pure series' compute is its slowest rank's share timed alone: the
+  // replay times the locality factor that measurement gives. The hybrid series deals its
+  // threads every 64th block at 64 processes too, and takes the same factor.
+  const auto& pure = doc["series"][0]["points"];
+  EXPECT_EQ(pure[0]["locality_factor"].get<double>(), 1.0);
+  for (std::size_t i = 1; i < 4; ++i) {
+    EXPECT_GT(pure[i]["locality_factor"].get<double>(), 0.0);
+    EXPECT_NEAR(pure[i]["compute_s"].get<double>(),
+                pure[i]["slowest_rank_measured_s"]["median"].get<double>(),
+                1e-9 * pure[i]["compute_s"].get<double>());
+  }
+  EXPECT_DOUBLE_EQ(doc["series"][1]["points"][3]["locality_factor"].get<double>(),
+                   pure[3]["locality_factor"].get<double>());
 }
 
 TEST(EmulateCli, BadInputIsOneLineAndKeepsTheOutput) {

@@ -139,6 +139,22 @@ TEST(PredictReplicated, TheSlowestRankAndOneReduction) {
   EXPECT_DOUBLE_EQ(idle.compute_s, 0.1 + 1.02);  // one block of all 20 on rank 0, three idle
 }
 
+TEST(WithLocality, ScalesTheLoopNotTheFixedCostNorTheMessages) {
+  MpiPrediction p;
+  p.ranks = 16;
+  p.compute_s = 0.1 + 0.4;  // fixed cost 0.1, loop 0.4
+  p.communication_s = 1e-5;
+  p.slowest_rank = 7;
+  const MpiPrediction q = with_locality(p, 1.5, 0.1);
+  EXPECT_DOUBLE_EQ(q.compute_s, 0.1 + 0.6);
+  EXPECT_DOUBLE_EQ(q.replay_compute_s, 0.5);
+  EXPECT_DOUBLE_EQ(q.locality, 1.5);
+  EXPECT_DOUBLE_EQ(q.communication_s, 1e-5);
+  EXPECT_EQ(q.slowest_rank, 7);
+  EXPECT_DOUBLE_EQ(with_locality(p, 1.0, 0.1).compute_s, p.compute_s);
+  EXPECT_THROW(with_locality(p, 0.0, 0.1), std::invalid_argument);
+}
+
 TEST(PredictDecomposed, WorkShareThenHaloThenCounts) {
   const CommunicationModel network{1e-6, 1e9, "test"};
   const std::vector<DecomposedRank> ranks{{30, 100, 2}, {70, 50, 1}};

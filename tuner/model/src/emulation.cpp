@@ -108,6 +108,14 @@ MpiPrediction predict_replicated(WorkView work, const MachineCosts& costs, doubl
   return slowest_of(rank_s, prediction);
 }
 
+MpiPrediction with_locality(MpiPrediction prediction, double factor, double fixed_s) {
+  if (!(factor > 0.0)) throw std::invalid_argument("with_locality: factor must be > 0");
+  prediction.replay_compute_s = prediction.compute_s;
+  prediction.locality = factor;
+  prediction.compute_s = fixed_s + factor * std::max(prediction.compute_s - fixed_s, 0.0);
+  return prediction;
+}
+
 MpiPrediction predict_decomposed(std::span<const DecomposedRank> ranks, std::uint64_t total_work,
                                  double one_rank_s, int threads_per_rank, double thread_efficiency,
                                  double bytes_per_ghost, const CommunicationModel& network,

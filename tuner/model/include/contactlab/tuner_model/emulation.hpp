@@ -92,7 +92,16 @@ struct MpiPrediction {
   double detect_s() const { return compute_s + communication_s; }
   int slowest_rank = 0;
   double rank_imbalance = 0.0;  // (max - mean) / max of the ranks' loop times
+  // The deal's locality factor in compute_s (1: none applied), and compute_s before it.
+  double locality = 1.0;
+  double replay_compute_s = 0.0;
 };
+
+// `prediction` with its loop (compute_s less the fixed cost every rank pays) multiplied by a
+// locality factor measured for the deal (a share of every P-th block timed alone): what the
+// calibrated costs, fitted on scenes the caches hold whole, leave out when a rank or thread
+// jumps from block to block of a large scene.
+MpiPrediction with_locality(MpiPrediction prediction, double factor, double fixed_s);
 
 // Replicated data (the paper's 4.4): every rank holds the whole scene and runs its blocks with
 // `threads_per_rank` threads under `schedule`; the timed part ends with one reduction of the
