@@ -23,7 +23,7 @@ struct ThreadEmulationOptions {
   // The chunk study: the best chunk of each kind at these thread counts, for the first
   // particle/sorted/full variant's structure (the paper's Table 7 loop).
   std::vector<int> chunk_threads{2, 4, 8, 16};
-  std::vector<int> chunk_grid = log2_chunk_grid(4096);
+  std::vector<int> chunk_grid = log2_chunk_grid(65536);
 };
 
 struct MeasuredThreads {
