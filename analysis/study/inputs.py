@@ -68,6 +68,8 @@ def mpi_model(path):
         model = need(document, "$", "model")
         for key in ("latency_s", "bandwidth_bytes_per_s"):
             number(model, "$.model", key)
+        # What every rank's loop costs however small its share (older files: none recorded).
+        fixed = number(document, "$", "loop_fixed_s") if "loop_fixed_s" in document else 0.0
         series = []
         for spath, s in items(document, "$", "series"):
             points = []
@@ -77,6 +79,11 @@ def mpi_model(path):
                     "efficiency")})
                 # Optional: (max - mean) / max of the ranks' loop times, where the file has it.
                 point.rank_imbalance = number(p, ppath, "rank_imbalance") if "rank_imbalance" in p else None
+                # Optional: the deal's locality factor in compute_s (files from before it have
+                # none), and the replay before it: compute_s = fixed + factor (replay - fixed).
+                point.locality = number(p, ppath, "locality_factor") if "locality_factor" in p else 1.0
+                point.replay_compute_s = (fixed + (point.compute_s - fixed) / point.locality
+                                          if point.locality > 0 else point.compute_s)
                 # Optional: the slowest rank's loop timed alone on this machine (measured).
                 point.slowest_measured = (interval_object(p["slowest_rank_measured_s"],
                                                           f"{ppath}.slowest_rank_measured_s")

@@ -75,6 +75,11 @@ class ReportOnFixture(unittest.TestCase):
             p["slowest_rank"] = 0
             p["slowest_rank_measured_s"] = {"median": t, "low": 0.9 * t, "high": 1.1 * t,
                                             "level": 0.95, "repetitions": 7}
+            # At 512 a locality factor as emulate mpi now writes it: compute_s holds it, and the
+            # report shows the replay before it (fixed cost 1e-4 s untouched).
+            if p["processes"] == 512:
+                p["locality_factor"] = 1.5
+        model["loop_fixed_s"] = 1e-4
         with open(mpi_path, "w") as f:
             json.dump(model, f)
         cls.process = run_report(cls.results)
@@ -199,9 +204,14 @@ class ReportOnFixture(unittest.TestCase):
         cells = self.row(text, ["1024"])
         t = 0.2 / 1024 ** 0.75
         self.assertEqual(cells[1], f"{t:.4g} [{0.9 * t:.4g}, {1.1 * t:.4g}]")
-        self.assertTrue(cells[2].endswith("§"), cells)  # the model's loop: predicted
-        self.assertEqual(cells[4], f"{1024 ** 0.75:.1f}")  # 0.2 / t
+        self.assertTrue(cells[2].endswith("§"), cells)  # the model's replay: predicted
+        self.assertEqual(cells[4], "1.00")  # no locality factor in this point
+        self.assertEqual(cells[5], f"{1024 ** 0.75:.1f}")  # 0.2 / t
         self.assertIn("gives 181x on our scene against the paper's 682x", text)
+        # With a factor the replay is the compute before it: fixed + (compute - fixed) / factor.
+        cells = self.row(text, ["512"])
+        self.assertEqual(cells[4], "1.50")
+        self.assertEqual(cells[2], f"*{1e-4 + (0.000878906 - 1e-4) / 1.5:.4g}*§")
 
     def test_classic_formulas_beside_the_emulated_best_chunk(self):
         text = self.section("**Best chunk at more threads", until="**The tuner model's predictions")
