@@ -349,8 +349,7 @@ int EmulateMpiCommand::run() const {
         fmt::print(
             "  {:>9} slowest rank {} measured alone: {:.6f} s (replayed loop {:.6f} s, locality "
             "{:.3f})\n",
-            procs, slowest_rank[i], alone.median,
-            m.locality != 1.0 ? m.replay_compute_s : m.compute_s, m.locality);
+            procs, slowest_rank[i], alone.median, m.replay_compute_s, m.locality);
       }
       points.push_back(std::move(point));
     }
@@ -382,7 +381,7 @@ int EmulateMpiCommand::run() const {
   // measurement (the series' compute holds it).
   for (std::size_t i = 0; i < slowest_measured.size(); ++i) {
     const tn::MpiPrediction& m = series[0].points[i];
-    const double replayed = m.locality != 1.0 ? m.replay_compute_s : m.compute_s;
+    const double replayed = m.replay_compute_s;
     validation.push_back(
         {{"mode", "replicated, slowest rank alone"},
          {"ranks", m.ranks},

@@ -133,6 +133,7 @@ TEST(PredictReplicated, TheSlowestRankAndOneReduction) {
   const MpiPrediction f = predict_replicated(WorkView(trace), MachineCosts::tests_only(), 0.01, 10,
                                              3, 1, {ScheduleKind::kStatic, 0}, network, 0.1);
   EXPECT_DOUBLE_EQ(f.compute_s, 0.1 + 0.75);
+  EXPECT_DOUBLE_EQ(f.replay_compute_s, f.compute_s);  // no locality factor yet
   const MpiPrediction idle =
       predict_replicated(WorkView(trace), MachineCosts::tests_only(), 0.01, 100, 4, 1,
                          {ScheduleKind::kStatic, 0}, network, 0.1);

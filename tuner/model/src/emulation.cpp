@@ -104,6 +104,7 @@ MpiPrediction predict_replicated(WorkView work, const MachineCosts& costs, doubl
   prediction.ranks = ranks;
   prediction.threads_per_rank = threads_per_rank;
   prediction.compute_s = *std::max_element(rank_s.begin(), rank_s.end());
+  prediction.replay_compute_s = prediction.compute_s;
   prediction.communication_s = network.collective_s(ranks, 8.0);
   return slowest_of(rank_s, prediction);
 }
@@ -143,6 +144,7 @@ MpiPrediction predict_decomposed(std::span<const DecomposedRank> ranks, std::uin
   prediction.ranks = count;
   prediction.threads_per_rank = threads_per_rank;
   prediction.compute_s = *std::max_element(compute.begin(), compute.end());
+  prediction.replay_compute_s = prediction.compute_s;
   prediction.communication_s =
       counts_s + *std::max_element(finish.begin(), finish.end()) - prediction.compute_s;
   return slowest_of(compute, prediction);

@@ -92,7 +92,8 @@ struct MpiPrediction {
   double detect_s() const { return compute_s + communication_s; }
   int slowest_rank = 0;
   double rank_imbalance = 0.0;  // (max - mean) / max of the ranks' loop times
-  // The deal's locality factor in compute_s (1: none applied), and compute_s before it.
+  // The deal's locality factor in compute_s (1: none applied), and compute_s before it (the
+  // replay, as the predict_ functions set it).
   double locality = 1.0;
   double replay_compute_s = 0.0;
 };
