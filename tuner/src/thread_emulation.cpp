@@ -236,10 +236,15 @@ ThreadEmulation emulate_threads(const Scene& scene, double diameter,
     // chunk finds little of the stencil's data in its caches, where the one-thread sweep had
     // brought it for a neighbouring cell: on the paper's scene such a share ran 1.1 - 1.3x its
     // replay, which the calibration scenes (cached whole) never show.
+    // Each factor once: static,k and dynamic,k at P threads share it.
+    std::map<ShareKey, double> factors;
     auto locality = [&](const Schedule& schedule, int threads) {
       if (threads <= 1 || !dealt_in_chunks(schedule)) return 1.0;
-      const auto found = shares.find({i, schedule.chunk, threads});
+      const ShareKey key{i, schedule.chunk, threads};
+      const auto found = shares.find(key);
       if (found == shares.end()) return 1.0;
+      const auto known = factors.find(key);
+      if (known != factors.end()) return known->second;
       const RankWork share = replicated_rank_work(
           model.prepared->view(), static_cast<std::uint32_t>(schedule.chunk), threads, 0);
       const double replayed =
@@ -247,7 +252,7 @@ ThreadEmulation emulate_threads(const Scene& scene, double diameter,
           (simulate_schedule(share.view(), 1, Schedule{}, model.costs).makespan_seconds -
            model.costs.seconds_per_region);
       const double measured = median(found->second) - median(no_share[i]);
-      return replayed > 0.0 && measured > 0.0 ? measured / replayed : 1.0;
+      return factors[key] = replayed > 0.0 && measured > 0.0 ? measured / replayed : 1.0;
     };
     auto loop_s = [&](int threads, const Schedule& schedule, double factor) {
       const ScheduleOutcome outcome = loop.replay(threads, schedule);
