@@ -144,6 +144,13 @@ std::size_t CellRegistry::index_bytes() const {
   return hashed ? occupied.bytes() : cell_begin.capacity() * sizeof(std::uint32_t);
 }
 
+std::size_t CellRegistry::buffer_bytes() const {
+  auto bytes = [](const auto& v) { return v.size() * sizeof(*v.data()); };
+  return index_bytes() + bytes(slot_particle) + bytes(particle_slot) + bytes(sort_buffer_) +
+         bytes(sort_scratch_) + bytes(wide_buffer_) + bytes(wide_scratch_) + bytes(histograms_) +
+         bytes(new_cells_);
+}
+
 void CellRegistry::assign(const CellGrid& grid, const Scene& scene, SortedCoordinates* sorted,
                           int threads, bool hashed_index) {
   if (!hashed_index)
@@ -215,17 +222,28 @@ namespace {
 constexpr int kDigitBits = 8;
 constexpr std::size_t kBuckets = std::size_t{1} << kDigitBits;
 
-constexpr std::size_t digit_of(std::uint64_t key, int shift) {
-  return (key >> shift) & (kBuckets - 1);
+constexpr std::size_t digit_of(std::uint64_t key, int shift, std::uint64_t mask = kBuckets - 1) {
+  return (key >> shift) & mask;
+}
+
+// The top digit's width with `team` threads sorting: each thread then sorts whole top buckets on
+// its own, so a bucket must be small beside a thread's share. The paper scene's fullest 8-bit
+// top bucket holds 2.5 % of the particles, 40 % of a share at 16 threads; 6 bits more than
+// log2(team) keep the fullest near a tenth of a share (up to 12 bits: 4096 buckets, whose
+// scatter streams the one top pass can still afford).
+int top_digit_bits(std::size_t team, int key_bits) {
+  int bits = kDigitBits;
+  while (bits < 12 && (std::size_t{1} << (bits - 6)) < team) ++bits;
+  return std::min(bits, key_bits);
 }
 
 // One stable pass: the entries [first, last) of `source` to `target` by their digit at `shift`,
 // each to the next free place of its digit in `next`, which advances.
 template <class Entry>
 void scatter_by_digit(const Entry* source, Entry* target, std::uint64_t first, std::uint64_t last,
-                      int shift, std::uint64_t* next) {
+                      int shift, std::uint64_t mask, std::uint64_t* next) {
   for (std::uint64_t i = first; i < last; ++i)
-    target[next[digit_of(source[i].key(), shift)]++] = source[i];
+    target[next[digit_of(source[i].key(), shift, mask)]++] = source[i];
 }
 
 }  // namespace
@@ -248,8 +266,8 @@ void CellRegistry::sort_and_index(const CellGrid& grid, const Scene& scene, std:
   buffer.resize(n);
   scratch.resize(n);
   if (!hashed) cell_begin.resize(keys + 1);
-  histograms_.assign(team * kBuckets, 0);
   new_cells_.assign(team + 1, 0);
+  range_totals_.resize(team);
   // With more than one thread the top digit goes first, over all entries, and each thread
   // then sorts whole top buckets by the lower digits on its own: every lower pass reads and
   // writes only lines of its thread. By lowest digit first, every pass scattered each thread's
@@ -261,8 +279,14 @@ void CellRegistry::sort_and_index(const CellGrid& grid, const Scene& scene, std:
   // of whole buckets is close to an even one (the paper scene's fullest holds 2.5 %; with the
   // 7 bits left above the lower digits' 16, 5 %).
   const bool top_first = team > 1 && passes > 1;
-  const int first_shift = top_first ? key_bits - kDigitBits : 0;
-  std::array<std::uint64_t, kBuckets + 1> bucket_begin{};  // top buckets' first entries
+  const int first_bits = top_first ? top_digit_bits(team, key_bits) : kDigitBits;
+  const int first_shift = top_first ? key_bits - first_bits : 0;
+  const std::size_t buckets = std::size_t{1} << first_bits;  // of the first pass
+  const std::uint64_t first_mask = buckets - 1;
+  // Each thread zeroes its own counts (resize zeroes only entries it adds, on the first run).
+  histograms_.resize(team * buckets);
+  bucket_begin_.resize(buckets + 1);  // the first pass's buckets' first entries
+  std::uint64_t* const bucket_begin = bucket_begin_.data();
   std::uint32_t largest = 0;
   Entry* from = buffer.data();
   Entry* to = scratch.data();
@@ -273,8 +297,8 @@ void CellRegistry::sort_and_index(const CellGrid& grid, const Scene& scene, std:
     const auto t = static_cast<std::size_t>(omp_get_thread_num());
     const std::size_t size = static_cast<std::size_t>(omp_get_num_threads());
     std::size_t b = n * t / size, e = n * (t + 1) / size;
-    std::uint64_t* mine = histograms_.data() + t * kBuckets;
-    std::fill(mine, mine + kBuckets, 0);
+    std::uint64_t* mine = histograms_.data() + t * buckets;
+    std::fill(mine, mine + buckets, 0);
     // The keys, a block at a time on SIMD lanes, and with them the first pass's histogram. A
     // dense grid's wide keys are its keys.
     constexpr std::size_t kKeyBlock = 256;
@@ -285,7 +309,7 @@ void CellRegistry::sort_and_index(const CellGrid& grid, const Scene& scene, std:
                    block_keys);
       for (std::size_t k = 0; k < count; ++k) {
         from[first + k] = Entry::make(block_keys[k], first + k);
-        ++mine[digit_of(block_keys[k], first_shift)];
+        ++mine[digit_of(block_keys[k], first_shift, first_mask)];
       }
     }
     Entry* in = from;
@@ -296,22 +320,31 @@ void CellRegistry::sort_and_index(const CellGrid& grid, const Scene& scene, std:
       if (!counted) {
         const Entry* const source = in;
         std::uint64_t* const counts = mine;
-        std::fill(counts, counts + kBuckets, 0);
-        for (std::size_t i = b; i < e; ++i) ++counts[digit_of(source[i].key(), shift)];
+        std::fill(counts, counts + buckets, 0);
+        for (std::size_t i = b; i < e; ++i) ++counts[digit_of(source[i].key(), shift, first_mask)];
       }
+      // Offsets: bucket by bucket, within a bucket thread by thread. Each thread lays out an
+      // equal range of the buckets, after the ranges before it (one thread laying out all
+      // buckets x threads counts took 0.3 ms at 64 threads).
+      const std::size_t bucket_first = buckets * t / size, bucket_last = buckets * (t + 1) / size;
+      std::uint64_t range_total = 0;
 #pragma omp barrier
-#pragma omp single
-      {  // offsets: bucket by bucket, within a bucket thread by thread
-        std::uint64_t running = 0;
-        for (std::size_t bucket = 0; bucket < kBuckets; ++bucket) {
-          bucket_begin[bucket] = running;
-          for (std::size_t u = 0; u < size; ++u) {
-            running += std::exchange(histograms_[u * kBuckets + bucket], running);
-          }
+      for (std::size_t bucket = bucket_first; bucket < bucket_last; ++bucket) {
+        for (std::size_t u = 0; u < size; ++u) range_total += histograms_[u * buckets + bucket];
+      }
+      range_totals_[t] = range_total;
+#pragma omp barrier
+      std::uint64_t running = 0;
+      for (std::size_t u = 0; u < t; ++u) running += range_totals_[u];
+      for (std::size_t bucket = bucket_first; bucket < bucket_last; ++bucket) {
+        bucket_begin[bucket] = running;
+        for (std::size_t u = 0; u < size; ++u) {
+          running += std::exchange(histograms_[u * buckets + bucket], running);
         }
-        bucket_begin[kBuckets] = running;
-      }  // implicit barrier
-      scatter_by_digit(in, out, b, e, shift, mine);
+      }
+      if (t + 1 == size) bucket_begin[buckets] = running;
+#pragma omp barrier
+      scatter_by_digit(in, out, b, e, shift, first_mask, mine);
       std::swap(in, out);
 #pragma omp barrier
     };
@@ -321,12 +354,12 @@ void CellRegistry::sort_and_index(const CellGrid& grid, const Scene& scene, std:
       shared_pass(first_shift, true);
       // This thread's top buckets: those starting in its share of the entries. Its slots are
       // theirs from here on (the cell index below included).
-      const auto* const starts = bucket_begin.data();
-      b = *std::lower_bound(starts, starts + kBuckets + 1, n * t / size);
-      e = *std::lower_bound(starts, starts + kBuckets + 1, n * (t + 1) / size);
+      const auto* const starts = bucket_begin;
+      b = *std::lower_bound(starts, starts + buckets + 1, n * t / size);
+      e = *std::lower_bound(starts, starts + buckets + 1, n * (t + 1) / size);
       // The lower digits' histograms of a bucket in one read of it (at most 7 lower digits).
       std::array<std::uint64_t, 7 * kBuckets> counts;
-      for (std::size_t bucket = 0; bucket < kBuckets; ++bucket) {
+      for (std::size_t bucket = 0; bucket < buckets; ++bucket) {
         const std::uint64_t first = bucket_begin[bucket], last = bucket_begin[bucket + 1];
         if (first < b || first >= e || last == first) continue;
         std::fill(counts.begin(), counts.begin() + (passes - 1) * kBuckets, 0);
@@ -342,7 +375,8 @@ void CellRegistry::sort_and_index(const CellGrid& grid, const Scene& scene, std:
           std::uint64_t running = first;
           for (std::size_t digit = 0; digit < kBuckets; ++digit)
             running += std::exchange(next[digit], running);
-          scatter_by_digit(bucket_in, bucket_out, first, last, pass * kDigitBits, next);
+          scatter_by_digit(bucket_in, bucket_out, first, last, pass * kDigitBits, kBuckets - 1,
+                           next);
           std::swap(bucket_in, bucket_out);
         }
       }
@@ -406,9 +440,11 @@ void CellRegistry::sort_and_index(const CellGrid& grid, const Scene& scene, std:
       squares += squares_here;
       largest = std::max(largest, static_cast<std::uint32_t>(largest_rank + 1));
     }
-    if (!hashed && t + 1 == size) {  // the keys past the last particle's (all when there is none)
+    if (!hashed) {  // the keys past the last particle's (all when there is none), shared out
       const std::uint64_t after = n == 0 ? 0 : in[n - 1].key() + 1;
-      for (std::uint64_t k = after; k <= keys; ++k) cell_begin[k] = static_cast<std::uint32_t>(n);
+      std::uint32_t* const begin_of = cell_begin.data();
+#pragma omp for schedule(static) nowait
+      for (std::uint64_t k = after; k <= keys; ++k) begin_of[k] = static_cast<std::uint32_t>(n);
     }
     if (hashed) {
       // The occupied cells, listed by each thread for its slots at its place in the list.

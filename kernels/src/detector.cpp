@@ -72,9 +72,11 @@ void ContactDetector::detect(const CellGrid& grid, const Layout& layout, const P
   // Ghosts are never homes: their own finds stay 0.
   if (!spec.homes.covers(n) || !spec.blocks.all())
     std::fill(found_count_.begin(), found_count_.end(), 0u);
-  // Half stencil: reverse_count_[t * n + j] counts the finds (h, j) of thread t, later the
-  // start of thread t's share of row j's reverse entries. Per-thread counts avoid atomics.
-  if (half) reverse_count_.resize(std::size_t{n} * threads);
+  if (half) {
+    reverse_count_.resize(n);
+    row_block_.assign(threads + 1, 0);
+    home_run_.assign(2 * std::size_t(threads), 0);
+  }
   contacts_.offsets.resize(std::size_t{n} + 1);
   range_sums_.assign(threads, 0);
   run.thread_busy_s.assign(threads, 0.0);
@@ -119,12 +121,11 @@ void ContactDetector::detect(const CellGrid& grid, const Layout& layout, const P
     } else {
       mine.partners.stop_borrowing();
     }
-    mine.homes.resize(n);  // room for every home; cut to those visited after the loop
+    mine.homes.clear();
     ContactOp<PairTest> op(test, mine, found_count_.data());
     if (options.observer) options.observer->thread_begin(tid);
     const double loop_start = omp_get_wtime();
     traversal::traverse(spec, layout, op);
-    mine.homes.resize(op.homes_visited());
     run.thread_busy_s[tid] = omp_get_wtime() - loop_start;
     thread_tests[tid] = op.tests();
     if (options.observer) options.observer->thread_end(tid);
@@ -136,130 +137,6 @@ void ContactDetector::detect(const CellGrid& grid, const Layout& layout, const P
   for (const auto t : thread_tests) run.candidate_tests += t;
   run.tiled = traversal::uses_tiles(spec);
   run.contact_pairs = contacts_.pair_count();
-}
-
-// Called by every thread of the detection region after its traversal. Row h = h's own finds,
-// then (half stencil) every find (g, h) made from another particle g, grouped by the thread
-// that made it.
-void ContactDetector::assemble_rows(int tid, int threads, bool half, bool rows_in_blocks) {
-  const std::uint32_t n = static_cast<std::uint32_t>(found_count_.size());
-  const detail::PartnerBuffer& out = thread_out_[tid].partners;
-  std::uint32_t* const reverse = half ? reverse_count_.data() + std::size_t{n} * tid : nullptr;
-  if (half) {
-    std::fill(reverse, reverse + n, 0u);
-    for (const std::uint32_t j : std::span(out.data(), out.size())) ++reverse[j];
-  }
-  // The row offsets by a parallel prefix sum: each thread sums the rows of its range of
-  // particles (turning the per-thread reverse counts of each row into where each thread's share
-  // starts), the ranges' sums are scanned, and each thread shifts its offsets.
-#pragma omp barrier
-  const std::uint32_t first = static_cast<std::uint32_t>(std::uint64_t{n} * tid / threads);
-  const std::uint32_t last = static_cast<std::uint32_t>(std::uint64_t{n} * (tid + 1) / threads);
-  std::uint64_t* const offsets = contacts_.offsets.data();
-  std::uint64_t running = 0;
-  for (std::uint32_t i = first; i < last; ++i) {
-    std::uint32_t row = found_count_[i];
-    if (half) {
-      // Exclusive prefix over threads: where each thread's reverse entries of row i start.
-      for (int t = 0; t < threads; ++t) {
-        std::uint32_t& count = reverse_count_[std::size_t{n} * t + i];
-        const std::uint32_t share = count;
-        count = row;
-        row += share;
-      }
-    }
-    running += row;
-    offsets[i + 1] = running;
-  }
-  range_sums_[tid] = running;
-#pragma omp barrier
-  std::uint64_t base = 0;
-  for (int t = 0; t < tid; ++t) base += range_sums_[t];
-  if (base > 0) {
-    for (std::uint32_t i = first; i < last; ++i) offsets[i + 1] += base;
-  }
-#pragma omp barrier
-#pragma omp single
-  {
-    offsets[0] = 0;
-    contacts_.partners.resize(offsets[n]);
-  }
-  if (rows_in_blocks) {
-    copy_row_blocks(tid, threads);
-    return;
-  }
-  // A buffer still borrowing the contact list's storage holds its rows in place (resize keeps
-  // them, copying them along if it has to grow).
-  if (out.borrowing()) return;
-  std::uint32_t* const partners = contacts_.partners.data();
-  const std::uint32_t* const finds = out.data();
-  const std::size_t total = out.size();
-  const auto& homes = thread_out_[tid].homes;
-  if (!half) {
-    // The full stencil's rows hold only their own finds: a run of consecutive homes (a chunk of
-    // the schedule) is one block of the output and one memcpy, not one per home (a call of about
-    // 100 bytes each, 1M of them on the paper's scene).
-    std::size_t at = 0;
-    for (std::size_t k = 0; k < homes.size();) {
-      const std::uint32_t first_home = homes[k];
-      std::size_t next = k + 1;
-      while (next < homes.size() && homes[next] == homes[next - 1] + 1) ++next;
-      const std::uint32_t end_home = homes[next - 1] + 1;
-      const std::size_t count = offsets[end_home] - offsets[first_home];
-      std::memcpy(partners + offsets[first_home], finds + at, count * sizeof(std::uint32_t));
-      at += count;
-      k = next;
-    }
-    return;
-  }
-  // The reverse entries land about a z-layer of cells ahead, megabytes beyond L2 on a dense
-  // scene: each target line is fetched for writing kAhead finds early, so the misses overlap
-  // (64 ran the half stencil 5 - 15 % faster than 16 on the paper and core scenes; also fetching
-  // the row's offset and start twice as far ahead gained nothing).
-  constexpr std::size_t kAhead = 64;
-  std::size_t at = 0;  // finds[at]: the next find
-  for (const std::uint32_t h : homes) {
-    const std::uint32_t count = found_count_[h];
-    if (count == 0) continue;
-    std::memcpy(partners + offsets[h], finds + at, count * sizeof(std::uint32_t));
-    for (const std::size_t end = at + count; at < end; ++at) {
-      if (at + kAhead < total) {
-        const std::uint32_t ahead = finds[at + kAhead];
-        __builtin_prefetch(partners + offsets[ahead] + reverse[ahead], 1);
-      }
-      const std::uint32_t j = finds[at];
-      partners[offsets[j] + reverse[j]++] = h;
-    }
-  }
-}
-
-// Where each thread's homes are consecutive rows (the full stencil under a static schedule
-// without a chunk size: see writes_first_rows_in_place), each thread's buffer is one block of
-// the output, starting at its first home's row. The blocks not written in place are copied by
-// every thread, an equal slice each: thread 0 writes in place and had nothing to copy, so
-// copying one's own rows left it idle while the others copied (at two threads, a quarter of the
-// output's time on one thread alone).
-void ContactDetector::copy_row_blocks(int tid, int threads) {
-  std::uint64_t total = 0;
-  for (int u = 0; u < threads; ++u) {
-    if (!thread_out_[u].partners.borrowing()) total += thread_out_[u].partners.size();
-  }
-  const std::uint64_t mine_first = total * tid / threads, mine_last = total * (tid + 1) / threads;
-  std::uint64_t block_first = 0;  // of block u, in the concatenation of the copied blocks
-  for (int u = 0; u < threads && block_first < mine_last; ++u) {
-    const detail::ThreadOutput& block = thread_out_[u];
-    if (block.partners.borrowing() || block.partners.size() == 0) continue;
-    const std::uint64_t block_last = block_first + block.partners.size();
-    const std::uint64_t first = std::max(block_first, mine_first);
-    const std::uint64_t last = std::min(block_last, mine_last);
-    if (first < last) {
-      const std::uint64_t row_start = contacts_.offsets[block.homes.front()];
-      std::memcpy(contacts_.partners.data() + row_start + (first - block_first),
-                  block.partners.data() + (first - block_first),
-                  (last - first) * sizeof(std::uint32_t));
-    }
-    block_first = block_last;
-  }
 }
 
 // Validates the options, builds the grid (cells at least the largest reach, D or the largest
@@ -438,6 +315,7 @@ void ContactDetector::release_buffers() {
   std::vector<detail::ThreadOutput>().swap(thread_out_);
   LargeVector<std::uint32_t>().swap(found_count_);
   LargeVector<std::uint32_t>().swap(reverse_count_);
+  LargeVector<std::uint64_t>().swap(row_weight_);
   sorted_ = {};
   narrow_x_ = narrow_y_ = narrow_z_ = narrow_d_ = {};
 }

@@ -148,8 +148,7 @@ struct NeighborTest {
 };
 
 // Appends each home's partners (those passing PairTest) to its thread's buffer, branchless,
-// and records the home and its count for assemble_rows. `out.homes` must have room for every
-// home the thread visits; homes_visited() says how many it recorded there.
+// and records the home (appended to `out.homes`) and its count for assemble_rows.
 template <class PairTest>
 class ContactOp {
  public:
@@ -158,7 +157,7 @@ class ContactOp {
   ContactOp(const PairTest& test, detail::ThreadOutput& out, std::uint32_t* found_count)
       : test_(test),
         out_(out.partners),
-        homes_(out.homes.data()),
+        homes_(out.homes),
         block_rows_(out.block_rows),
         found_count_(found_count) {}
 
@@ -208,7 +207,6 @@ class ContactOp {
     for (int b = 0; b < count; ++b) record(homes[b], found[b]);
   }
   std::uint64_t tests() const { return tests_; }
-  std::size_t homes_visited() const { return visited_; }
 
  private:
   // Copies a block home's row behind the ones before it. Rows of up to kShortRow partners (a
@@ -228,14 +226,14 @@ class ContactOp {
   void record(const Home& home, std::size_t found) {
     out_.advance(found);
     found_count_[home.particle] = static_cast<std::uint32_t>(found);
-    homes_[visited_++] = home.particle;  // a push_back's capacity check was 1 % of T_ALL
+    *homes_.tail(1) = home.particle;
+    homes_.advance(1);
     tests_ += home.tests;
   }
 
   PairTest test_;
   detail::PartnerBuffer& out_;
-  std::uint32_t* homes_;
-  std::size_t visited_ = 0;
+  detail::PartnerBuffer& homes_;
   LargeVector<std::uint32_t>& block_rows_;
   std::uint32_t* found_count_;
   std::uint64_t tests_ = 0;

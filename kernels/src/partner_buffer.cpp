@@ -47,9 +47,13 @@ void PartnerBuffer::stop_borrowing() {
 }
 
 void PartnerBuffer::grow(std::size_t entries) {
-  constexpr std::size_t kHugePage = std::size_t{2} << 20;
+  // Whole huge pages once past one; below, 64 KiB steps: a small scene's threads each fault in
+  // and zero a few pages, not a 2 MiB page per buffer (16 threads x 2 buffers of a tiny scene
+  // had spent more time zeroing huge pages than detecting).
+  constexpr std::size_t kHugePage = std::size_t{2} << 20, kSmallStep = std::size_t{64} << 10;
   const std::size_t wanted = std::max(2 * capacity_, entries) * sizeof(std::uint32_t);
-  const std::size_t bytes = (wanted + kHugePage - 1) / kHugePage * kHugePage;
+  const std::size_t step = wanted < kHugePage ? kSmallStep : kHugePage;
+  const std::size_t bytes = (wanted + step - 1) / step * step;
   const std::size_t old_bytes = capacity_ * sizeof(std::uint32_t);
   void* p = data_ && !borrowed_ ? ::mremap(data_, old_bytes, bytes, MREMAP_MAYMOVE)
                                 : ::mmap(nullptr, bytes, PROT_READ | PROT_WRITE,
@@ -59,7 +63,7 @@ void PartnerBuffer::grow(std::size_t entries) {
     std::memcpy(p, data_, size_ * sizeof(std::uint32_t));
     borrowed_ = false;
   }
-  ::madvise(p, bytes, MADV_HUGEPAGE);  // advice only
+  if (bytes >= kHugePage) ::madvise(p, bytes, MADV_HUGEPAGE);  // advice only
   data_ = static_cast<std::uint32_t*>(p);
   capacity_ = bytes / sizeof(std::uint32_t);
 }

@@ -206,6 +206,9 @@ struct CellRegistry {
 
   // Bytes held by the cell index (the dense table, or the occupied cells and their table).
   std::size_t index_bytes() const;
+  // Bytes of everything registered: the index, the slots and the sort's buffers (their
+  // entries); the same at any thread count but for the sort's per-thread digit counts.
+  std::size_t buffer_bytes() const;
 
  private:
   // Radix sort entries: a cell key and an input index. Keys below 2^32 share one word with the
@@ -231,8 +234,10 @@ struct CellRegistry {
 
   LargeVector<NarrowEntry> sort_buffer_, sort_scratch_;
   LargeVector<WideEntry> wide_buffer_, wide_scratch_;
-  std::vector<std::uint64_t> histograms_;  // per thread, the radix digit counts
-  std::vector<std::uint64_t> new_cells_;   // per thread, occupied cells starting in its slots
+  std::vector<std::uint64_t> histograms_;    // per thread, the radix digit counts
+  std::vector<std::uint64_t> new_cells_;     // per thread, occupied cells starting in its slots
+  std::vector<std::uint64_t> bucket_begin_;  // the first pass's buckets' first entries
+  std::vector<std::uint64_t> range_totals_;  // per thread, the entries of its range of buckets
 };
 
 }  // namespace contactlab

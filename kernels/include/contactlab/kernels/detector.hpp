@@ -28,13 +28,19 @@ namespace detail {
 // What one thread of the detection loop writes: its partners and the homes it visited, on
 // cache lines of its own. (Side by side, the threads' size fields shared a line, and every
 // home's append moved it between cores: two threads ran the traversal no faster than one.)
-// The homes are a LargeVector reserved for every particle once: huge pages, touched only as
-// far as written (a doubling std::vector faulted in and copied its 4 KiB pages one by one, a
-// tenth of a first run at 2 threads where a page fault costs about 10 us).
+// Every buffer grows with what this thread writes, none with the particle count: P threads
+// hold N homes and C finds between them, whatever P is (room for every home in each thread's
+// list was N x P entries of address space, 1 GB at 256 threads on the paper's scene).
 struct alignas(64) ThreadOutput {
   PartnerBuffer partners;
-  LargeVector<std::uint32_t> homes;       // in visiting order
+  PartnerBuffer homes;                    // in visiting order
   LargeVector<std::uint32_t> block_rows;  // rows of a block's later homes, before they move
+  // Half stencil: the reverse entries this thread found for rows another thread assembles,
+  // as (row, partner) pairs in finding order, then grouped by the assembling thread (group t
+  // starts at pair spill_begin[t]).
+  PartnerBuffer spills;
+  LargeVector<std::uint32_t> spills_by_row_block;
+  std::vector<std::uint64_t> spill_begin;
 };
 
 }  // namespace detail
@@ -173,6 +179,17 @@ class ContactDetector {
   // for a caller that next needs the memory (the MPI output). The next run reallocates them.
   void release_buffers();
 
+  // What the buffers kept between runs hold after the last run, in bytes: their entries, not
+  // their capacity (the per-thread buffers are address space, touched only as far as written).
+  // `spill_bytes` is the half stencil's reverse entries passed between threads: at most 16
+  // bytes a contact pair, whatever the thread count; all else is the same at any thread count
+  // but for vectors of a few entries per thread.
+  struct BufferBytes {
+    std::size_t total = 0;
+    std::size_t spill_bytes = 0;
+  };
+  BufferBytes buffer_bytes() const;
+
   // Contacts of the last run in working ids (see working_to_input()).
   const ContactList& contacts() const { return contacts_; }
   // Working id -> input row; empty when the working order is the input order.
@@ -193,7 +210,13 @@ class ContactDetector {
   // Whether the prepared particles' contact test runs on SIMD lanes (in blocks of homes, with
   // tiles of sparse cells): run() and iteration_work() decide alike.
   bool tests_on_lanes() const;
+  // The CSR rows after the traversal (src/detector_rows.cpp), called by every thread of the
+  // detection region.
   void assemble_rows(int tid, int threads, bool half, bool rows_in_blocks);
+  void assemble_half_rows(int tid, int threads);
+  void choose_row_blocks(int tid, int threads);
+  void finish_offsets(int tid, int threads, std::uint32_t first, std::uint32_t last,
+                      std::uint64_t rows_sum);
   void copy_row_blocks(int tid, int threads);
 
   std::vector<std::uint64_t> range_sums_;  // assemble_rows: each thread's rows, summed
@@ -205,7 +228,13 @@ class ContactDetector {
   // Per-thread partner buffers and per-particle bookkeeping, kept between runs.
   std::vector<detail::ThreadOutput> thread_out_;
   LargeVector<std::uint32_t> found_count_;  // own finds per particle
+  // Half stencil: the reverse entries of each row, then where the next one goes in it. Thread t
+  // assembles rows [row_block_[t], row_block_[t + 1]); home_run_ holds each thread's first home
+  // and home count (choose_row_blocks), row_weight_ the rows' weights summed per kWeightRows.
   LargeVector<std::uint32_t> reverse_count_;
+  std::vector<std::uint32_t> row_block_;
+  std::vector<std::uint64_t> home_run_;
+  LargeVector<std::uint64_t> row_weight_;
 };
 
 }  // namespace contactlab

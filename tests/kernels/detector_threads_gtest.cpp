@@ -1,0 +1,203 @@
+// Detection at the thread counts users run, 1 to 16 (oversubscribed on small machines), against
+// the brute force: the half stencil's rows (reverse entries passed between threads, rows split by
+// the homes' runs or by weight), the registration's radix sort (its top digit widens with the
+// thread count) and the buffers a detection keeps, which must not grow with the thread count.
+#include <gtest/gtest.h>
+
+#include <string>
+#include <vector>
+
+#include "test_support.hpp"
+
+namespace contactlab::test {
+namespace {
+
+const std::vector<int> kThreads = {1, 2, 3, 4, 8, 16};
+
+struct Case {
+  std::string name;
+  Scene scene;
+  double diameter;
+  ContactList expected;
+};
+
+// A centre-clustered scene (the paper's kind: dense cells in the middle, sparse ones around),
+// the dense core, and a polydisperse one; a few thousand particles each.
+const std::vector<Case>& cases() {
+  static const std::vector<Case> all = [] {
+    std::vector<Case> made;
+    auto add = [&](std::string name, SceneSpec spec) {
+      Scene scene = generate_scene(spec);
+      ContactList expected = brute_force_contacts(scene, spec.diameter);
+      made.push_back({std::move(name), std::move(scene), spec.diameter, std::move(expected)});
+    };
+    SceneSpec clustered;
+    clustered.kind = SceneKind::kClustered;
+    clustered.n = 4000;
+    clustered.diameter = 0.025;
+    clustered.seed = 7;
+    add("clustered", clustered);
+    SceneSpec core;
+    core.kind = SceneKind::kCore;
+    core.n = 3000;
+    core.diameter = 0.02;
+    core.seed = 8;
+    add("core", core);
+    SceneSpec poly;
+    poly.kind = SceneKind::kPolydisperse;
+    poly.n = 2500;
+    poly.diameter = 0.08;
+    poly.size_ratio = 4.0;
+    poly.seed = 9;
+    add("polydisperse", poly);
+    return made;
+  }();
+  return all;
+}
+
+std::vector<Variant> variants_under_test() {
+  std::vector<Variant> variants;
+  const std::vector<Schedule> schedules = {{ScheduleKind::kStatic, 0},
+                                           {ScheduleKind::kStatic, 5},
+                                           {ScheduleKind::kDynamic, 3},
+                                           {ScheduleKind::kGuided, 2}};
+  for (const auto loop : {LoopKind::kParticle, LoopKind::kCell}) {
+    for (const auto order : {Order::kUnsorted, Order::kSorted}) {
+      for (const auto stencil : {Stencil::kHalf, Stencil::kFull}) {
+        for (const Schedule& schedule : schedules) {
+          Variant v{loop, order, stencil, schedule, Precision::kDouble};
+          variants.push_back(v);
+          if (schedule.kind == ScheduleKind::kDynamic) {
+            v.grid = GridIndex::kHashed;
+            variants.push_back(v);
+          }
+        }
+      }
+    }
+  }
+  return variants;
+}
+
+TEST(DetectionThreads, EveryThreadCountMatchesTheBruteForce) {
+  const std::vector<Variant> variants = variants_under_test();
+  for (const Case& c : cases()) {
+    for (const Variant& variant : variants) {
+      for (const int threads : kThreads) {
+        SCOPED_TRACE(c.name + " " + to_string(variant) + " threads=" + std::to_string(threads));
+        const Detected d = detect(c.scene, variant, c.diameter, threads);
+        ASSERT_TRUE(same_contacts(d.contacts, c.expected));
+        EXPECT_EQ(d.run.threads, threads);
+      }
+    }
+  }
+}
+
+// Ghosts (a home range) and a block-cyclic share of the loop (replicated MPI): the rows at any
+// thread count are those of one thread.
+TEST(DetectionThreads, HomeRangesAndBlocksAreTheSameAtEveryThreadCount) {
+  const Case& c = cases().front();
+  const auto n = static_cast<std::uint32_t>(c.scene.size());
+  struct Homes {
+    HomeRange range;
+    HomeBlocks blocks;
+  };
+  const std::vector<Homes> homes = {{{0, n - n / 4}, {}}, {{n / 5, n}, {}}, {{}, {7, 3, 1}}};
+  for (const Homes& h : homes) {
+    for (const auto stencil : {Stencil::kHalf, Stencil::kFull}) {
+      for (const Schedule schedule :
+           {Schedule{ScheduleKind::kStatic, 0}, Schedule{ScheduleKind::kDynamic, 4}}) {
+        const Variant variant{LoopKind::kParticle, Order::kSorted, stencil, schedule,
+                              Precision::kDouble};
+        ContactList one;
+        for (const int threads : kThreads) {
+          SCOPED_TRACE(to_string(variant) + " homes [" + std::to_string(h.range.first) + ", " +
+                       std::to_string(h.range.last) + ") block " + std::to_string(h.blocks.block) +
+                       " threads=" + std::to_string(threads));
+          ContactDetector detector;
+          DetectOptions options;
+          options.variant = variant;
+          options.diameter = c.diameter;
+          options.threads = threads;
+          options.homes = h.range;
+          options.blocks = h.blocks;
+          detector.run(c.scene, options);
+          const ContactList got = detector.canonical_contacts();
+          if (threads == 1) {
+            one = got;
+            ASSERT_GT(one.partners.size(), 0u);
+          } else {
+            ASSERT_TRUE(same_contacts(got, one));
+          }
+        }
+      }
+    }
+  }
+}
+
+// The registration (radix sort by cell key, cell index, reordering) is the same for any thread
+// count, on a grid whose keys take three digits, so that the top digit goes first and widens
+// (8 bits up to 4 threads, 10 at 16, 12 at 64).
+TEST(DetectionThreads, RegistrationIsTheSameAtEveryThreadCount) {
+  const Case& c = cases().front();
+  for (const bool hashed : {false, true}) {
+    const CellGrid grid(c.scene.box, 0.004, CellNumbering::kLinear);  // 250^3 cells: 24-bit keys
+    CellRegistry one;
+    SortedCoordinates one_sorted;
+    one.assign(grid, c.scene, &one_sorted, 1, hashed);
+    for (const int threads : {2, 3, 4, 8, 16, 64}) {
+      SCOPED_TRACE("threads=" + std::to_string(threads) + (hashed ? " hashed" : " dense"));
+      CellRegistry many;
+      SortedCoordinates sorted;
+      many.assign(grid, c.scene, &sorted, threads, hashed);
+      EXPECT_TRUE(many.slot_particle == one.slot_particle);
+      EXPECT_TRUE(many.cell_begin == one.cell_begin);
+      EXPECT_TRUE(many.occupied.key == one.occupied.key);
+      EXPECT_TRUE(many.occupied.begin == one.occupied.begin);
+      EXPECT_TRUE(sorted.x == one_sorted.x && sorted.y == one_sorted.y && sorted.z == one_sorted.z);
+      EXPECT_EQ(many.max_occupancy, one.max_occupancy);
+      EXPECT_EQ(many.occupancy_squares, one.occupancy_squares);
+    }
+  }
+}
+
+// What a detection keeps between runs, at 1 to 64 threads: the same bytes but for vectors of a
+// few entries per thread (the sort's digit counts the largest: at most 4096 a thread), plus the
+// half stencil's reverse entries passed between threads, at most 16 bytes a contact pair at any
+// thread count. (Counts per (thread, particle) had made it N x P.)
+TEST(DetectionThreads, BuffersDoNotGrowWithTheThreadCount) {
+  SceneSpec spec;
+  spec.kind = SceneKind::kClustered;
+  spec.n = 40000;
+  spec.diameter = 0.01;
+  spec.seed = 3;
+  const Scene scene = generate_scene(spec);
+  constexpr std::size_t kPerThreadBytes = 64 << 10;
+  for (const std::string name : {"particle/sorted/half/static", "particle/sorted/half/dynamic,64",
+                                 "cell/unsorted/half/static", "particle/sorted/full/static,200"}) {
+    const Variant variant = parse_variant(name);
+    ContactDetector::BufferBytes one;
+    std::uint64_t pairs = 0;
+    for (const int threads : {1, 2, 4, 16, 64}) {
+      SCOPED_TRACE(name + " threads=" + std::to_string(threads));
+      ContactDetector detector;
+      DetectOptions options;
+      options.variant = variant;
+      options.diameter = spec.diameter;
+      options.threads = threads;
+      const DetectRun run = detector.run(scene, options);
+      const ContactDetector::BufferBytes bytes = detector.buffer_bytes();
+      if (threads == 1) {
+        one = bytes;
+        pairs = run.contact_pairs;
+        EXPECT_EQ(bytes.spill_bytes, 0u);
+        continue;
+      }
+      EXPECT_EQ(run.contact_pairs, pairs);
+      EXPECT_LE(bytes.spill_bytes, 16 * pairs);
+      EXPECT_LE(bytes.total - bytes.spill_bytes, one.total + threads * kPerThreadBytes);
+    }
+  }
+}
+
+}  // namespace
+}  // namespace contactlab::test
