@@ -335,6 +335,19 @@ TEST(Log2ChunkGrid, DoublesUpToTheLargest) {
   EXPECT_THROW(log2_chunk_grid(0), std::invalid_argument);
 }
 
+// Chunks that leave every thread at least 16 of them: 300,000 iterations at 2 threads keep
+// 1 .. 8192 (9375 allowed), at 16 threads 1 .. 1024 (1171); a loop too short for any keeps the
+// smallest chunk.
+TEST(BalancedChunkGrid, KeepsSixteenChunksAThread) {
+  const std::vector<int> grid = log2_chunk_grid(65536);
+  EXPECT_EQ(balanced_chunk_grid(grid, 300000, 2), log2_chunk_grid(8192));
+  EXPECT_EQ(balanced_chunk_grid(grid, 300000, 16), log2_chunk_grid(1024));
+  EXPECT_EQ(balanced_chunk_grid(grid, 32 * 16, 32), (std::vector<int>{1}));
+  EXPECT_EQ(balanced_chunk_grid(grid, 10, 4), (std::vector<int>{1}));
+  const std::vector<int> coarse = {64, 256, 1024};
+  EXPECT_EQ(balanced_chunk_grid(coarse, 1000, 4), (std::vector<int>{64}));
+}
+
 TEST(PredictBestChunk, BalancesImbalanceAgainstChunkCosts) {
   // 1000 particles: 800 cheap ones, then a dense tail of 200 with 100 tests each.
   std::vector<std::uint32_t> work(800, 1);

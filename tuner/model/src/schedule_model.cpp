@@ -337,6 +337,18 @@ std::vector<int> log2_chunk_grid(int largest_chunk) {
   return grid;
 }
 
+std::vector<int> balanced_chunk_grid(std::span<const int> grid, std::size_t iterations,
+                                     int threads) {
+  const std::uint64_t largest =
+      iterations / (std::uint64_t{kMinChunksPerThread} * static_cast<std::uint64_t>(std::max(1, threads)));
+  std::vector<int> kept;
+  for (const int chunk : grid) {
+    if (static_cast<std::uint64_t>(chunk) <= largest) kept.push_back(chunk);
+  }
+  if (kept.empty() && !grid.empty()) kept.push_back(*std::min_element(grid.begin(), grid.end()));
+  return kept;
+}
+
 ChunkPrediction predict_best_chunk(WorkView work, int threads, ScheduleKind kind,
                                    const MachineCosts& costs,
                                    std::span<const int> candidate_chunks) {

@@ -56,15 +56,15 @@ class SearchMethod final : public TuningMethod {
                             options.search_samples);
     };
     ChunkSearchOptions& search_options = state.search_options;
-    search_options.grid = options.chunk_grid;
+    search_options.grid = balanced_chunk_grid(options.chunk_grid, tuned.work.tests.size(), threads);
     const int model_chunk = tuned.model_choice.schedule.chunk;
-    search_options.seed_chunk = model_chunk > 0 ? model_chunk : options.chunk_grid.back();
+    search_options.seed_chunk = model_chunk > 0 ? model_chunk : search_options.grid.back();
     // Budget: a fifth of what the exhaustive sweep would spend, in measured runs. What the
     // bracket and golden section leave of it goes to confirming the chunks still equivalent
     // to the fastest (more samples, narrower intervals).
     search_options.confirmation_rounds = 2;
     search_options.budget.max_evaluations =
-        std::max(3, static_cast<int>(options.chunk_grid.size()) * options.exhaustive_rounds / 5 /
+        std::max(3, static_cast<int>(search_options.grid.size()) * options.exhaustive_rounds / 5 /
                         options.search_samples);
     const ChunkSearchResult searched = search_chunk(measure_chunk, search_options);
     Variant chosen = with_schedule(tuned.variant, kind, searched.chosen_chunk);

@@ -38,6 +38,9 @@ struct EmulatedThreads {
   // A chunked deal's locality factor on the loop (1: a static block, one thread, or guided):
   // thread 0's share of the deal timed alone at one thread over its replay (thread_emulation.cpp).
   double locality = 1.0;
+  // Of detect_s: the rest of the assembly after the loop (offsets, reverse entries), fitted as
+  // serial + parallel / P from its measured times.
+  double assembly_s = 0.0;
   double total_s() const { return setup_s + detect_s; }
 };
 
