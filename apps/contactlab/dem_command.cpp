@@ -149,7 +149,6 @@ struct DemRunCommand {
     if (auto_variant && calibration_steps_ == 0) {
       throw InputError("--calibration-steps must be >= 1");
     }
-    if (!variant_log_.empty()) check_writable(variant_log_);
     const bool has_sink = settings.sink_below_z > -std::numeric_limits<double>::infinity();
     if (until_discharged_ < 0 || until_discharged_ > 1) {
       throw InputError("--until-discharged must be a fraction in (0, 1]");
@@ -157,7 +156,8 @@ struct DemRunCommand {
     if (until_discharged_ > 0 && !has_sink) {
       throw InputError("--until-discharged needs a config with a sink");
     }
-    // Output paths are checked before any work.
+    // Output folders are made, and output paths checked, before any work.
+    if (!variant_log_.empty()) prepare_output_file(variant_log_);
     std::unique_ptr<dem::FrameWriter> writer;
     if (!vtk_dir_.empty()) writer = std::make_unique<dem::FrameWriter>(vtk_dir_, config.name);
     dem::Particles initial = dem::make_particles(config);
@@ -183,7 +183,7 @@ struct DemRunCommand {
     if (!discharge.empty()) log = std::make_unique<dem::DischargeLog>(discharge);
     std::string checkpoint = checkpoint_;
     if (checkpoint.empty() && !vtk_dir_.empty()) checkpoint = in_dir(vtk_dir_, "last.chk");
-    if (!checkpoint.empty()) check_writable(checkpoint);
+    if (!checkpoint.empty()) prepare_output_file(checkpoint);
     // --variant auto: the force model calibrated on this run's start (a few short runs from
     // copies of it), then the variant it predicts fastest; --retune re-prices at each rebuild.
     std::unique_ptr<VariantTuning> tuning;

@@ -76,7 +76,7 @@ int DemProfileCommand::run() const {
   for (const int t : emulate_) {
     if (t < 1) throw InputError("--emulate: every thread count must be >= 1");
   }
-  if (!json_out_.empty()) check_writable(json_out_);
+  if (!json_out_.empty()) prepare_output_file(json_out_);
   const std::uint64_t steps = start_.steps;
   const dem::Particles particles = dem::make_particles(config);
   auto make_engine = [&](const dem::ForceVariant& v, int threads) {

@@ -61,7 +61,7 @@ nlohmann::json costs_json(const dem::ForceCosts& c) {
 int tune_dem(const DemTuneRequest& request) {
   if (request.steps == 0) throw InputError("--dem-steps must be >= 1");
   if (request.verify_rounds < 1) throw InputError("--verify-rounds must be >= 1");
-  if (!request.json_out.empty()) check_writable(request.json_out);
+  if (!request.json_out.empty()) prepare_output_file(request.json_out);
   DemStart start;
   start.config = request.config;
   start.restart = request.restart;

@@ -169,8 +169,8 @@ int DetectCommand::run() const {
 
   std::optional<tn::CacheGeometry> geometry;
   if (!cache_sim_.empty()) geometry = tn::parse_cache_geometry(cache_sim_);
-  if (!contacts_out_.empty()) check_writable(contacts_out_);
-  if (!json_out_.empty()) check_writable(json_out_);
+  if (!contacts_out_.empty()) prepare_output_file(contacts_out_);
+  if (!json_out_.empty()) prepare_output_file(json_out_);
   std::optional<tn::PapiCounters> papi;
   if (papi_ || !papi_events_.empty()) {
     papi.emplace(papi_events_.empty() ? std::vector<std::string>{} : split_list(papi_events_));

@@ -194,7 +194,7 @@ int run_detect_mpi(const MpiDetectRequest& request) {
       options.warmup = request.warmup;
       options.repeat = request.repeat;
       if (!automatic) variant = parse_variant(request.variant);
-      if (!request.json_out.empty() && rank == 0) check_writable(request.json_out);
+      if (!request.json_out.empty() && rank == 0) prepare_output_file(request.json_out);
       open_source(*request.scene, options.mode, opened);
     });
     DetectOptions detect_options{variant, request.scene->diameter_, request.threads, nullptr};
@@ -234,7 +234,7 @@ int run_tune_mpi(const MpiTuneRequest& request) {
       options.mode = mpi::parse_mode(request.mpi.mode);
       options.block = request.mpi.block;
       options.halo = request.mpi.halo;
-      if (!request.json_out.empty() && rank == 0) check_writable(request.json_out);
+      if (!request.json_out.empty() && rank == 0) prepare_output_file(request.json_out);
       open_source(*request.scene, options.mode, opened);
     });
     const double diameter = request.scene->diameter_;

@@ -66,7 +66,7 @@ struct EmulateThreadsCommand {
 
   int run() const {
     scene_.require_diameter();
-    if (!json_out_.empty()) check_writable(json_out_);
+    if (!json_out_.empty()) prepare_output_file(json_out_);
     tn::ThreadEmulationOptions options;
     // Variants are separated by ';' or by ',' before a loop name (a schedule has commas).
     std::string text = variants_;
@@ -174,7 +174,7 @@ struct EmulateMpiCommand {
 
 int EmulateMpiCommand::run() const {
   scene_.require_diameter();
-  if (!json_out_.empty()) check_writable(json_out_);
+  if (!json_out_.empty()) prepare_output_file(json_out_);
   if (threads_per_rank_ < 1) throw InputError("--threads-per-rank must be >= 1");
   if (block_ < 1) throw InputError("--block must be >= 1");
   if (!(latency_s_ >= 0.0) || !(bandwidth_ > 0.0)) {

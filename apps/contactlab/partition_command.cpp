@@ -79,7 +79,7 @@ void print_report(const PartitionReport& report, PartitionMethod method, bool ev
 int PartitionCommand::run() const {
   if (ranks_ < 1) throw InputError("--ranks must be >= 1");
   if (halo_ < 0.0) throw InputError("--halo must be >= 0");
-  if (!json_out_.empty()) check_writable(json_out_);
+  if (!json_out_.empty()) prepare_output_file(json_out_);
   auto [scene, record] = scene_.load();
   const double reach = scene.has_diameters() ? scene.max_diameter() : scene_.diameter_;
   if (halo_ > 0.0 && halo_ < reach) {

@@ -16,7 +16,7 @@ struct SceneCommand {
 
   int run() const {
     scene_.require_diameter();
-    check_writable(out_);
+    prepare_output_file(out_);
     const Scene scene = generate_scene(scene_.spec());
     const bool text = out_.ends_with(".csv") || out_.ends_with(".txt");
     if (text) {

@@ -156,7 +156,7 @@ int TuneCommand::run() const {
 #endif
   }
   check();
-  if (!json_out_.empty()) check_writable(json_out_);
+  if (!json_out_.empty()) prepare_output_file(json_out_);
   const tn::TuneOptions options = this->options();
   auto [scene, scene_record] = scene_.load();
   const double diameter = scene_.diameter_;

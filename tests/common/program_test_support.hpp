@@ -1,11 +1,12 @@
 // Helpers of the tuner and program tests: running the contactlab program, temporary folders,
-// a small scene.
+// output paths whose folders cannot be made, a small scene.
 #pragma once
 
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -82,6 +83,28 @@ inline std::string temp_dir(const std::string& name) {
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
   return dir.string();
+}
+
+// Output folders the programs must make (mkdir -p) and cannot make: a file where a folder
+// should be.
+inline constexpr const char* kInTheWay = "a file where a folder should be\n";
+
+// Writes `blocker` (kInTheWay) and returns blocker/a/b/`name`: a path whose folders cannot be
+// made.
+inline std::string path_under_a_file(const std::string& blocker, const std::string& name) {
+  std::ofstream(blocker) << kInTheWay;
+  return blocker + "/a/b/" + name;
+}
+
+// How a program answers an output path under the file `blocker`: exit 2 and one line (no other
+// output) naming the file in the way, which is untouched.
+inline void expect_blocked(const CommandResult& r, const std::string& blocker) {
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << r.output;
+  EXPECT_EQ(r.output.rfind("contactlab: error: ", 0), 0u) << r.output;
+  EXPECT_NE(r.output.find("'" + blocker + "' is a file, not a folder"), std::string::npos)
+      << r.output;
+  EXPECT_EQ(slurp(blocker), kInTheWay);
 }
 
 inline SceneSpec small_clustered(std::uint64_t n, double diameter = 0.02) {

@@ -1,6 +1,7 @@
 // `contactlab dem` end to end: frames and energy CSV, a restart that reproduces the
 // uninterrupted run's frames bit for bit, bad configs without output, validate's exit code, a
-// hopper's discharge series, --steps, and its PNG pictures.
+// hopper's discharge series, --steps, and its PNG pictures; every output option's folders made
+// when missing (as mkdir -p), and a folder that cannot be made one line at the start.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -358,6 +359,116 @@ TEST(DemCli, AutoVariantKeepsTheDefaultWithinTheMargin) {
   const std::string csv = slurp(log);
   EXPECT_EQ(csv.find('\n', csv.find('\n') + 1) + 1, csv.size()) << "one variant ran: " << csv;
   EXPECT_NE(csv.find(",ordered/static,"), std::string::npos) << csv;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Output folders: each option writing files makes its missing folders (nested, as mkdir -p) at
+// the start; one that cannot be made (a file in the way) stops the run there with one line.
+
+TEST(DemCli, VtkMakesItsFolders) {
+  TempDir dir;
+  const fs::path out = root(dir) / "out/bed1";
+  const auto r = run_command(contactlab_exe() + " dem run " + config_path() +
+                             " --threads 1 --steps 50 --vtk " + out.string() + "/");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  for (const char* file : {"drop.pvd", "drop_00000.vtp", "drop_energy.csv", "last.chk"}) {
+    EXPECT_TRUE(fs::is_regular_file(out / file)) << file;
+  }
+}
+
+TEST(DemCli, PngMakesItsFolders) {
+  TempDir dir;
+  const fs::path out = root(dir) / "new/a/b";
+  const auto r = run_command(contactlab_exe() + " dem run " + tiny_hopper(dir) +
+                             " --threads 1 --steps 100 --png " + out.string());
+#ifdef CONTACTLAB_HAVE_CAIRO
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  for (const char* file : {"tiny_section_00000.png", "tiny_discharge.png", "tiny_discharge.csv"}) {
+    EXPECT_TRUE(fs::is_regular_file(out / file)) << file;
+  }
+#else
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("built without cairo"), std::string::npos) << r.output;
+#endif
+}
+
+TEST(DemCli, DischargeMakesItsFolders) {
+  TempDir dir;
+  const std::string csv = dir.file("new/a/b/d.csv");
+  const auto r = run_command(contactlab_exe() + " dem run " + tiny_hopper(dir) +
+                             " --threads 1 --steps 100 --discharge " + csv);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(slurp(csv).rfind("time_s,step,discharged_kg,", 0), 0u);
+}
+
+TEST(DemCli, CheckpointMakesItsFolders) {
+  TempDir dir;
+  const std::string chk = dir.file("new/a/b/c.chk");
+  const auto r = run_command(contactlab_exe() + " dem run " + config_path() +
+                             " --threads 1 --steps 50 --checkpoint " + chk);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_TRUE(fs::is_regular_file(chk));
+}
+
+TEST(DemCli, VariantLogMakesItsFolders) {
+  TempDir dir;
+  const std::string log = dir.file("new/a/b/variants.csv");
+  const auto r = run_retuned("--steps 50", log);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(slurp(log).rfind("begin_step,end_step,time_s,variant,predicted_gain\n", 0), 0u);
+}
+
+TEST(DemCli, ProfileJsonMakesItsFolders) {
+  TempDir dir;
+  const std::string profile =
+      contactlab_exe() + " dem profile " + config_path() + " --steps 5 --threads 1 --rounds 1";
+  const std::string out = dir.file("new/a/b/profile.json");
+  const auto r = run_command(profile + " --json " + out);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(nlohmann::json::parse(slurp(out))["kind"], "contactlab-dem-profile");
+  const std::string blocker = dir.file("blocker");
+  expect_blocked(run_command(profile + " --json " + path_under_a_file(blocker, "p.json")), blocker);
+}
+
+TEST(DemCli, TuneDemJsonMakesItsFolders) {
+  TempDir dir;
+  const std::string tune = contactlab_exe() + " tune --dem " + config_path() +
+                           " --threads 1 --dem-steps 5 --predict-only";
+  const std::string out = dir.file("new/a/b/tune-dem.json");
+  const auto r = run_command(tune + " --json " + out);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(slurp(out).find("\"kind\": \"dem_force_variant_tuning\""), std::string::npos);
+  const std::string blocker = dir.file("blocker");
+  expect_blocked(run_command(tune + " --json " + path_under_a_file(blocker, "t.json")), blocker);
+}
+
+// Every output option of `dem run` under a file: exit 2 and one line naming the file in the
+// way, before any step (the issue's `--vtk out/bed1/` where `out` is a file among them); the
+// outputs of an earlier run in the --vtk folder are kept as they were.
+TEST(DemCli, RunOutputUnderAFileStopsAtTheStartAndKeepsEarlierOutput) {
+  TempDir dir;
+  const fs::path vtk = root(dir) / "vtk";
+  const std::string run =
+      contactlab_exe() + " dem run " + config_path() + " --threads 1 --steps 50";
+  ASSERT_EQ(run_command(run + " --vtk " + vtk.string()).exit_code, 0);
+  const std::string pvd = slurp(vtk / "drop.pvd"), chk = slurp(vtk / "last.chk");
+  const std::string blocker = dir.file("out");
+  const std::string under = path_under_a_file(blocker, "x");
+  const std::string hopper = contactlab_exe() + " dem run " + tiny_hopper(dir) + " --threads 1";
+  std::vector<std::string> commands = {run + " --vtk " + blocker + "/bed1/",
+                                       run + " --vtk " + vtk.string() + " --checkpoint " + under,
+                                       hopper + " --vtk " + vtk.string() + " --discharge " + under,
+                                       run + " --variant auto --calibration-steps 5 --vtk " +
+                                           vtk.string() + " --variant-log " + under};
+#ifdef CONTACTLAB_HAVE_CAIRO
+  commands.push_back(run + " --vtk " + vtk.string() + " --png " + under);
+#endif
+  for (const std::string& command : commands) {
+    SCOPED_TRACE(command);
+    expect_blocked(run_command(command), blocker);
+    EXPECT_EQ(slurp(vtk / "drop.pvd"), pvd);
+    EXPECT_EQ(slurp(vtk / "last.chk"), chk);
+  }
 }
 
 }  // namespace

@@ -1,5 +1,8 @@
-// Output files: write_file_atomically / check_writable, and write_pairs_csv.
+// Output files: write_file_atomically / prepare_output_file (missing folders made, as mkdir -p;
+// a folder that cannot be made is one line naming the path and why), and write_pairs_csv.
 #include <gtest/gtest.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #include <filesystem>
 #include <stdexcept>
@@ -87,32 +90,84 @@ TEST(AtomicFile, StreamFailureIsAnInputError) {
   EXPECT_EQ(dir.entries(), std::vector<std::string>{"s.txt"});
 }
 
-TEST(AtomicFile, MissingDirectoryThrowsInputError) {
+TEST(AtomicFile, MakesTheMissingFoldersAsMkdirP) {
   TempDir dir;
   const std::string path = dir.file("no/such/dir/out.csv");
-  bool called = false;
-  try {
-    write_file_atomically(path, [&](std::ostream&) { called = true; });
-    ADD_FAILURE() << "no exception";
-  } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
+  write_file_atomically(path, [](std::ostream& out) { out << "made\n"; });
+  EXPECT_EQ(read_text(path), "made\n");
+  EXPECT_EQ(dir.entries(), std::vector<std::string>{"no"});
+  // Nothing but the file in its folder: the temporary was renamed.
+  std::vector<std::string> names;
+  for (const auto& e : std::filesystem::directory_iterator(dir.path() / "no/such/dir")) {
+    names.push_back(e.path().filename().string());
   }
-  EXPECT_FALSE(called) << "the callback ran although the file cannot be written";
-  EXPECT_FALSE(std::filesystem::exists(dir.path() / "no"));
+  EXPECT_EQ(names, std::vector<std::string>{"out.csv"});
+  // A trailing separator and "." / ".." in the folder are as mkdir -p takes them.
+  write_file_atomically(dir.file("a/./b/../c/out.csv"), [](std::ostream& out) { out << "x"; });
+  EXPECT_EQ(read_text(dir.file("a/c/out.csv")), "x");
+  EXPECT_TRUE(std::filesystem::is_directory(dir.path() / "a/b"));
 }
 
-TEST(AtomicFile, CheckWritable) {
+TEST(AtomicFile, PrepareOutputFile) {
   TempDir dir;
-  EXPECT_NO_THROW(check_writable(dir.file("new.csv")));
-  EXPECT_THROW(check_writable(dir.file("missing/new.csv")), InputError);
-  // A path that is a directory cannot be written as a file.
+  EXPECT_NO_THROW(prepare_output_file(dir.file("new.csv")));
+  EXPECT_EQ(dir.entries(), std::vector<std::string>{}) << "a file was created by preparing";
+  // Missing folders are made, the file is not.
+  EXPECT_NO_THROW(prepare_output_file(dir.file("missing/deeper/new.csv")));
+  EXPECT_TRUE(std::filesystem::is_directory(dir.path() / "missing/deeper"));
+  EXPECT_FALSE(std::filesystem::exists(dir.path() / "missing/deeper/new.csv"));
+  // A path that is a folder cannot be written as a file.
   std::filesystem::create_directory(dir.path() / "sub");
-  EXPECT_THROW(check_writable(dir.file("sub")), InputError);
+  EXPECT_THROW(prepare_output_file(dir.file("sub")), InputError);
   EXPECT_THROW(write_file_atomically(dir.file("sub"), [](std::ostream& out) { out << "x"; }),
                InputError);
   EXPECT_TRUE(std::filesystem::is_directory(dir.path() / "sub"));
-  // Nothing was created by checking.
-  EXPECT_EQ(dir.entries(), std::vector<std::string>{"sub"});
+  EXPECT_EQ(dir.entries(), (std::vector<std::string>{"missing", "sub"}));
+}
+
+// A file where a folder of the path should be: one line naming the path, the folder and the
+// file in the way; the file is untouched, the callback never runs, and an existing output
+// elsewhere is not touched either.
+TEST(AtomicFile, AFileInTheWayIsOneLineNamingItAndNothingIsLost) {
+  TempDir dir;
+  write_text(dir.file("blocker"), "a file, not a folder\n");
+  for (const std::string& path : {dir.file("blocker/out.csv"), dir.file("blocker/a/b/out.csv")}) {
+    try {
+      prepare_output_file(path);
+      ADD_FAILURE() << "no exception for " << path;
+    } catch (const InputError& e) {
+      const std::string message = e.what();
+      EXPECT_EQ(message.rfind(path + ": cannot create the folder '", 0), 0u) << message;
+      EXPECT_NE(message.find("'" + dir.file("blocker") + "' is a file, not a folder"),
+                std::string::npos)
+          << message;
+      EXPECT_EQ(message.find('\n'), std::string::npos) << message;
+    }
+    bool called = false;
+    EXPECT_THROW(write_file_atomically(path, [&](std::ostream&) { called = true; }), InputError);
+    EXPECT_FALSE(called) << "the callback ran although the file cannot be written";
+  }
+  EXPECT_EQ(read_text(dir.file("blocker")), "a file, not a folder\n");
+  EXPECT_EQ(dir.entries(), std::vector<std::string>{"blocker"});
+}
+
+// No permission to make the folder: the message gives the system's reason. (Root may write
+// anywhere: skipped there.)
+TEST(AtomicFile, AFolderThatMayNotBeMadeIsOneLineWithTheReason) {
+  if (::geteuid() == 0) GTEST_SKIP() << "root may make folders anywhere";
+  TempDir dir;
+  std::filesystem::create_directory(dir.path() / "locked");
+  ::chmod(dir.file("locked").c_str(), 0500);
+  const std::string path = dir.file("locked/a/out.csv");
+  try {
+    prepare_output_file(path);
+    ADD_FAILURE() << "no exception";
+  } catch (const InputError& e) {
+    const std::string message = e.what();
+    EXPECT_EQ(message.rfind(path + ": cannot create the folder '", 0), 0u) << message;
+    EXPECT_NE(message.find("ermission denied"), std::string::npos) << message;
+  }
+  ::chmod(dir.file("locked").c_str(), 0700);
 }
 
 // ----------------------------------------------------------------------------------------------
@@ -165,10 +220,14 @@ TEST(PairsCsv, MatchesTheDetectedContacts) {
                             brute_force_contacts(scene, spec.diameter)));
 }
 
-TEST(PairsCsv, FailsCleanlyForAMissingDirectory) {
+TEST(PairsCsv, MakesAMissingFolderAndFailsCleanlyForAFileInTheWay) {
   TempDir dir;
-  EXPECT_THROW(write_pairs_csv(list_from_pairs(2, {{0, 1}}), dir.file("missing/pairs.csv")),
+  write_pairs_csv(list_from_pairs(2, {{0, 1}}), dir.file("missing/pairs.csv"));
+  EXPECT_EQ(read_text(dir.file("missing/pairs.csv")), "i,j\n0,1\n");
+  write_text(dir.file("blocker"), "kept");
+  EXPECT_THROW(write_pairs_csv(list_from_pairs(2, {{0, 1}}), dir.file("blocker/pairs.csv")),
                InputError);
+  EXPECT_EQ(read_text(dir.file("blocker")), "kept");
 }
 
 }  // namespace

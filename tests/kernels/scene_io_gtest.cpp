@@ -318,8 +318,16 @@ TEST(SceneIo, WritersReplaceFilesAtomically) {
   write_text_scene(scene, path);
   expect_same_scene(read_scene(path, Box{}), scene);
   EXPECT_EQ(dir.entries(), std::vector<std::string>{"s.bin"});
-  EXPECT_THROW(write_binary_scene(scene, dir.file("missing-dir/s.bin")), InputError);
-  EXPECT_THROW(write_text_scene(scene, dir.file("missing-dir/s.csv")), InputError);
+  // Missing folders are made (as mkdir -p); under a file they cannot be, and nothing changes.
+  write_binary_scene(scene, dir.file("missing/dir/s.bin"));
+  expect_same_scene(read_scene(dir.file("missing/dir/s.bin"), Box{}), scene);
+  write_text_scene(scene, dir.file("missing/dir/s.csv"));
+  expect_same_scene(read_scene(dir.file("missing/dir/s.csv"), Box{}), scene);
+  const std::string kept = read_text(path);
+  EXPECT_THROW(write_binary_scene(scene, path + "/s.bin"), InputError);
+  EXPECT_THROW(write_text_scene(scene, path + "/sub/s.csv"), InputError);
+  EXPECT_EQ(read_text(path), kept);
+  EXPECT_EQ(dir.entries(), (std::vector<std::string>{"missing", "s.bin"}));
 }
 
 }  // namespace

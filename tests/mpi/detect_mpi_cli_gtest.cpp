@@ -109,6 +109,30 @@ TEST(DetectMpi, ABadOptionOnEveryRankGivesOneMessage) {
   }
 }
 
+// --contacts-out and --json in folders that do not exist yet: rank 0 makes them before the
+// detection (the other ranks write the contacts file's shares into the folder it made); under
+// a file, every rank ends with one message.
+TEST(DetectMpi, OutputsMakeTheirFolders) {
+  TempDir dir;
+  const std::string detect = mpiexec(2) + contactlab_exe() +
+                             " detect --scene clustered --n 3000 -D 0.03 --threads 1"
+                             " --mpi decomposed --repeat 1 --warmup 0";
+  const std::string csv = dir.file("new/a/b/pairs.csv"), json = dir.file("new/c/d/r.json");
+  const auto run = run_command(detect + " --contacts-out " + csv + " --json " + json);
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  EXPECT_EQ(slurp(csv).rfind("i,j\n", 0), 0u);
+  EXPECT_EQ(tuner::read_result_file(json).runs.size(), 1u);
+  const std::string blocker = dir.file("blocker");
+  for (const char* option : {" --contacts-out ", " --json "}) {
+    const auto blocked = run_command(detect + option + path_under_a_file(blocker, "x"));
+    EXPECT_NE(blocked.exit_code, 0) << option << blocked.output;
+    EXPECT_EQ(count_of(blocked.output, "contactlab: error:"), 1) << option << blocked.output;
+    EXPECT_NE(blocked.output.find("'" + blocker + "' is a file, not a folder"), std::string::npos)
+        << option << blocked.output;
+    EXPECT_EQ(slurp(blocker), kInTheWay);
+  }
+}
+
 // --repeat and --warmup: one sample per timed repetition, each its slowest rank's, and the
 // repetition settings in the record.
 TEST(DetectMpi, RepetitionsAreEachTheSlowestRanks) {

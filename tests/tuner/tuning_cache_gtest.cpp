@@ -48,8 +48,9 @@ std::string rejection(const TuningCache& cache) {
   return "";
 }
 
-// `--cache tuning.json` names a file in the working folder (no folder to create); a folder that
-// cannot be made (a file stands where it should be) is a one-line InputError.
+// `--cache tuning.json` names a file in the working folder (no folder to create); missing
+// folders are made; a folder that cannot be made (a file stands where it should be) is a
+// one-line InputError.
 TEST(TuningCache, ABareFileNameIsSavedInTheWorkingFolder) {
   test::TempDir dir;
   const std::filesystem::path before = std::filesystem::current_path();
@@ -58,6 +59,9 @@ TEST(TuningCache, ABareFileNameIsSavedInTheWorkingFolder) {
   EXPECT_NO_THROW(bare.store_calibration(sample_calibration()));
   std::filesystem::current_path(before);
   EXPECT_TRUE(std::filesystem::exists(dir.file("tuning.json")));
+  TuningCache nested(dir.file("new/a/b/tuning.json"));
+  EXPECT_NO_THROW(nested.store_calibration(sample_calibration()));
+  EXPECT_TRUE(std::filesystem::is_regular_file(dir.file("new/a/b/tuning.json")));
   std::ofstream(dir.file("blocker")) << "a file, not a folder\n";
   TuningCache blocked(dir.file("blocker") + "/tuning.json");
   EXPECT_THROW(blocked.store_calibration(sample_calibration()), InputError);

@@ -113,7 +113,7 @@ std::pair<std::uint64_t, std::uint64_t> contact_differences(const ContactList& r
 
 SweepSummary run_sweep(const Experiment& experiment, const SweepOptions& options) {
   namespace fs = std::filesystem;
-  check_writable(options.out);
+  prepare_output_file(options.out);
   ResultFile result;
   std::optional<Context> resumed;  // the context of the file resumed
   if (fs::exists(options.out)) {

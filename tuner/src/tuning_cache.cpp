@@ -171,13 +171,7 @@ json TuningCache::load() const {
 }
 
 void TuningCache::save(const json& document) const {
-  // A bare file name has no folder to make (create_directories("") throws).
-  const std::filesystem::path folder = std::filesystem::path(path_).parent_path();
-  std::error_code error;
-  if (!folder.empty()) std::filesystem::create_directories(folder, error);
-  if (error) {
-    throw InputError(path_ + ": cannot create the tuning cache's folder (" + error.message() + ")");
-  }
+  // The cache's folder is made if missing (write_file_atomically).
   write_file_atomically(path_, [&](std::ostream& out) { out << document.dump(2) << '\n'; });
 }
 

@@ -34,7 +34,9 @@ DischargeRow discharge_row(const Engine& engine) {
   return row;
 }
 
-DischargeLog::DischargeLog(std::string path) : path_(std::move(path)) { check_writable(path_); }
+DischargeLog::DischargeLog(std::string path) : path_(std::move(path)) {
+  prepare_output_file(path_);
+}
 
 void DischargeLog::record(const Engine& engine) {
   rows_.push_back(discharge_row(engine));

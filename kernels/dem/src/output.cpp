@@ -15,7 +15,7 @@ namespace contactlab::dem {
 FrameWriter::FrameWriter(std::string dir, std::string name)
     : dir_(std::move(dir)), name_(std::move(name)) {
   if (!dir_.empty() && dir_.back() != '/') dir_ += '/';
-  check_writable(dir_ + name_ + ".pvd");
+  prepare_output_file(dir_ + name_ + ".pvd");
 }
 
 std::string FrameWriter::frame_path(int frame) const {

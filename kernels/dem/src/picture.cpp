@@ -191,7 +191,7 @@ SectionPainter::SectionPainter(std::string dir, std::string name, SectionView vi
       view_.layers < 1) {
     throw InputError("section picture: empty window or plot narrower than 50 px");
   }
-  check_writable(frame_path(0));
+  prepare_output_file(frame_path(0));
 }
 
 std::string SectionPainter::frame_path(int frame) const {

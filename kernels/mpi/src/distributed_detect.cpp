@@ -385,7 +385,7 @@ PreparedRun prepare(MPI_Comm comm, const SceneSource& source, const DetectOption
     }
     if (source.path.empty() && !source.scene) throw InputError("no scene given");
     if (!mpi_options.contacts_out.empty() && result.rank == 0) {
-      check_writable(mpi_options.contacts_out);
+      prepare_output_file(mpi_options.contacts_out);
     }
   });
   if (mpi_options.mode == Mode::kReplicated) {

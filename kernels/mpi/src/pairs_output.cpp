@@ -68,6 +68,7 @@ void write_pairs_parallel(MPI_Comm comm, std::vector<std::uint64_t> pairs, std::
   // are sent from where they are, without a copy per destination.
   std::vector<int> send_counts(ranks, 0), send_displs(ranks, 0);
   run_checked(comm, [&] {
+    if (rank == 0) prepare_output_file(path);  // the folder, made if missing
     std::sort(pairs.begin(), pairs.end());
     std::vector<std::uint64_t> counts(ranks, 0);
     for (const std::uint64_t pair : pairs) ++counts[writer_of(pair >> 32, n, ranks)];

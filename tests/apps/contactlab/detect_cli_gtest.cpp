@@ -1,8 +1,11 @@
 // contactlab detect end to end: the result file it writes passes the strict reader, with
-// counters or a recorded reason; bad input gives one clear line, exit 2 and no file.
+// counters or a recorded reason; bad input gives one clear line, exit 2 and no file. Also the
+// output folders of detect, scene and partition: made when missing (as mkdir -p), and a path
+// that cannot be made is one line, exit 2, before any work and with the old output kept.
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <fstream>
 
 #include "contactlab/kernels/scene_options.hpp"
 #include "contactlab/tuner/papi_counters.hpp"
@@ -108,6 +111,67 @@ TEST(DetectCli, ContactsOutStillWritten) {
   const auto r = detect("--repeat 1 --contacts-out " + dir.file("c.csv"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_TRUE(std::filesystem::exists(dir.file("c.csv")));
+}
+
+TEST(DetectCli, JsonMakesItsFolders) {
+  test::TempDir dir;
+  const std::string json = dir.file("new/a/b/r.json");
+  const auto r = detect("--repeat 1 --warmup 0 --json " + json);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(read_result_file(json).runs.size(), 1u);
+}
+
+TEST(DetectCli, ContactsOutMakesItsFolders) {
+  test::TempDir dir;
+  const std::string csv = dir.file("new/a/b/c.csv");
+  const auto r = detect("--repeat 1 --warmup 0 --contacts-out " + csv);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(test::slurp(csv).rfind("i,j\n", 0), 0u);
+}
+
+// One output's folder cannot be made: the run stops before detecting, and the other output's
+// earlier file is kept as it was.
+TEST(DetectCli, AFileInTheWayIsOneLineAndKeepsTheOldOutput) {
+  test::TempDir dir;
+  const std::string json = dir.file("r.json");
+  std::ofstream(json) << "earlier result\n";
+  const std::string blocker = dir.file("blocker");
+  const auto r = detect("--repeat 1 --json " + json + " --contacts-out " +
+                        test::path_under_a_file(blocker, "c.csv"));
+  test::expect_blocked(r, blocker);
+  EXPECT_EQ(test::slurp(json), "earlier result\n");
+  const auto other = detect("--repeat 1 --json " + test::path_under_a_file(blocker, "r.json"));
+  test::expect_blocked(other, blocker);
+}
+
+TEST(SceneCli, OutMakesItsFolders) {
+  test::TempDir dir;
+  const std::string out = dir.file("new/a/b/s.csv");
+  const auto r = test::run_command(test::contactlab_exe() +
+                                   " scene --kind uniform --n 100 -D 0.05 --out " + out);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_TRUE(std::filesystem::is_regular_file(out));
+  const std::string blocker = dir.file("blocker");
+  test::expect_blocked(
+      test::run_command(test::contactlab_exe() + " scene --kind uniform --n 100 -D 0.05 --out " +
+                        test::path_under_a_file(blocker, "s.bin")),
+      blocker);
+}
+
+TEST(PartitionCli, JsonMakesItsFolders) {
+  test::TempDir dir;
+  const std::string json = dir.file("new/a/b/p.json");
+  const auto r =
+      test::run_command(test::contactlab_exe() +
+                        " partition --scene uniform --n 1000 -D 0.05 --ranks 2 --json " + json);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_TRUE(std::filesystem::is_regular_file(json));
+  const std::string blocker = dir.file("blocker");
+  test::expect_blocked(
+      test::run_command(test::contactlab_exe() +
+                        " partition --scene uniform --n 1000 -D 0.05 --ranks 2 --json " +
+                        test::path_under_a_file(blocker, "p.json")),
+      blocker);
 }
 
 void expect_rejected(const std::string& options, const std::string& message) {

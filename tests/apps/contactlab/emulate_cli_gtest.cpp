@@ -1,9 +1,11 @@
 // contactlab emulate end to end: the thread emulation's document (measured with intervals,
 // emulated, the anchor, the checks, the chunk study), the MPI model's series checked against a
-// measured `detect --mpi` run, and bad input as one line with nothing written.
+// measured `detect --mpi` run, bad input as one line with nothing written, --json's folders
+// made.
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
 
@@ -175,6 +177,28 @@ TEST(EmulateCli, BadInputIsOneLineAndKeepsTheOutput) {
     EXPECT_NE(r.output.find(message), std::string::npos) << arguments << "\n" << r.output;
     EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << r.output;
     EXPECT_EQ(slurp(out), "{\"kept\": true}\n");
+  }
+}
+
+// --json in folders that do not exist yet: made (as mkdir -p); under a file, one line before
+// anything is timed.
+TEST(EmulateCli, JsonMakesItsFolders) {
+  TempDir dir;
+  const std::string blocker = dir.file("blocker");
+  const std::string commands[] = {
+      " emulate threads --scene uniform --n 2000 -D 0.05 --variants particle/sorted/full/static"
+      " --threads 1,4 --measured-threads 1 --chunk-threads 4 --rounds 1",
+      " emulate mpi --scene uniform --n 2000 -D 0.05 --processes 1,4 --threads-per-rank 1"
+      " --rounds 1 --no-slowest-rank"};
+  for (const std::string& command : commands) {
+    const std::string out = dir.file("new/a/b/e.json");
+    const auto r = run_command(with_cache() + contactlab_exe() + command + " --json " + out);
+    ASSERT_EQ(r.exit_code, 0) << command << "\n" << r.output;
+    EXPECT_TRUE(json::parse(slurp(out)).contains("kind")) << command;
+    std::filesystem::remove_all(dir.file("new"));
+    expect_blocked(run_command(with_cache() + contactlab_exe() + command + " --json " +
+                               path_under_a_file(blocker, "e.json")),
+                   blocker);
   }
 }
 

@@ -1,5 +1,5 @@
 // contactlab sweep end to end: results are complete, an interrupted sweep resumes to the same
-// set of points, a bad config writes nothing.
+// set of points, a bad config writes nothing, --out's folders are made.
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -144,6 +144,25 @@ TEST(SweepCli, ResumesOnlyOnTheMachineAndBuildItsFileNames) {
   const auto own = run_command(sweep + " --resume");
   ASSERT_EQ(own.exit_code, 0) << own.output;
   EXPECT_EQ(point_keys(out).size(), 20u);
+}
+
+// --out in folders that do not exist yet: made (as mkdir -p); under a file, one line before
+// any point is measured.
+TEST(SweepCli, OutMakesItsFolders) {
+  const std::string dir = temp_dir("sweep_folders");
+  json config = json::parse(std::ifstream(kSmoke));
+  config["scenes"] = json::array({config["scenes"][1]});
+  config["variants"] = {"cell/unsorted/half/dynamic,4"};
+  config["threads"] = {1};
+  std::ofstream(dir + "/one.json") << config.dump();
+  const std::string out = dir + "/new/a/b/r.json";
+  const auto r = run_command(contactlab_exe() + " sweep " + dir + "/one.json --out " + out);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(point_keys(out).size(), 1u);
+  const std::string blocker = dir + "/blocker";
+  expect_blocked(run_command(contactlab_exe() + " sweep " + dir + "/one.json --out " +
+                             path_under_a_file(blocker, "r.json")),
+                 blocker);
 }
 
 TEST(SweepCli, BadConfigIsOneLineAndWritesNothing) {

@@ -1,5 +1,5 @@
 // contactlab tune end to end: the tuner reports every method honestly, --variant auto caches,
-// --threads 0 means the same in tune and detect.
+// --threads 0 means the same in tune and detect, --json's folders are made.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -127,6 +127,20 @@ TEST(TuneCli, ThreadsZeroFollowsOmpNumThreadsInTuneAndVariantAuto) {
       << "--variant auto missed the choice tune stored:\n"
       << detected.output;
   EXPECT_EQ(detected.output.find("no cached choice"), std::string::npos) << detected.output;
+}
+
+// --json in folders that do not exist yet: made (as mkdir -p); under a file, one line before
+// the tuning starts.
+TEST(TuneCli, JsonMakesItsFolders) {
+  const std::string dir = temp_dir("tune_folders");
+  const std::string tune = "CONTACTLAB_CACHE_DIR=" + tune_cache() + " " + contactlab_exe() +
+                           " tune --scene uniform --n 2000 -D 0.05 --threads 1 --predict-only"
+                           " --json ";
+  const auto r = run_command(tune + dir + "/new/a/b/t.json");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(json::parse(std::ifstream(dir + "/new/a/b/t.json"))["methods"].size(), 1u);
+  const std::string blocker = dir + "/blocker";
+  expect_blocked(run_command(tune + path_under_a_file(blocker, "t.json")), blocker);
 }
 
 TEST(TuneCli, RoundsBelowOneAreAClearError) {

@@ -8,13 +8,17 @@
 namespace contactlab {
 
 // Calls `write` on a stream to a temporary file beside `path`, then renames it onto `path`.
-// On any error (from `write` or from the stream) the temporary file is removed, `path` is
-// untouched, and InputError is thrown naming the file.
+// `path`'s missing folders are made first (prepare_output_file). On any error (from `write` or
+// from the stream) the temporary file is removed, `path` is untouched, and InputError is thrown
+// naming the file.
 void write_file_atomically(const std::string& path, const std::function<void(std::ostream&)>& write,
                            bool binary = false);
 
-// Throws InputError unless `path`'s directory exists and is writable: checked before long
-// runs so that a typo in an output path fails at once rather than after the work.
-void check_writable(const std::string& path);
+// Makes `path`'s folder and the folders above it that are missing, as `mkdir -p` does, then
+// throws InputError unless that folder is writable and `path` is not itself a folder. The one
+// place output folders are made: the programs call it for every output path before a long run,
+// so that an impossible path (a file where a folder should be, no permission) fails at once
+// rather than after the work. The message is one line naming `path` and the reason.
+void prepare_output_file(const std::string& path);
 
 }  // namespace contactlab

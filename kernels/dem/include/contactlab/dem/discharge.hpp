@@ -24,7 +24,8 @@ DischargeRow discharge_row(const Engine& engine);
 
 class DischargeLog {
  public:
-  // Throws InputError if the file's directory is not writable.
+  // Makes the file's folder (and those above it) if missing; throws InputError if it cannot be
+  // made or is not writable.
   explicit DischargeLog(std::string path);
   // Appends the engine's row and rewrites the file.
   void record(const Engine& engine);

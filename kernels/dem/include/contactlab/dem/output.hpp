@@ -12,7 +12,8 @@ namespace contactlab::dem {
 class FrameWriter {
  public:
   // Frames go to dir/<name>_<frame>.vtp, the series to dir/<name>.pvd, energies to
-  // dir/<name>_energy.csv. Throws InputError if dir is not writable.
+  // dir/<name>_energy.csv. Makes dir (and the folders above it) if missing; throws InputError
+  // if it cannot be made or is not writable.
   FrameWriter(std::string dir, std::string name);
   // Writes frame `frame` (particles in stable-id order: id, radius, velocity, angular velocity,
   // contact count, contact force magnitude) and rewrites the .pvd and the CSV.

@@ -30,7 +30,8 @@ std::vector<std::uint8_t> height_layers(const Particles& initial, int layers);
 
 class SectionPainter {
  public:
-  // Pictures go to dir/<name>_section_NNNNN.png. Throws InputError if dir is not writable.
+  // Pictures go to dir/<name>_section_NNNNN.png. Makes dir (and the folders above it) if
+  // missing; throws InputError if it cannot be made or is not writable.
   SectionPainter(std::string dir, std::string name, SectionView view,
                  std::vector<std::uint8_t> layer_of_id);
   std::string frame_path(int frame) const;
