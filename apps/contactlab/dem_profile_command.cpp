@@ -1,7 +1,7 @@
 // `contactlab dem profile`: the report's profile of a DEM step (Otsuka): the phase split at one
 // thread against its 80/15/5, the serial fraction, the Amdahl bound it implies against the
 // measured speed-up, and with --emulate the step at thread counts this machine does not have
-// (dem/step_emulation.hpp), checked against the thread counts it has.
+// (tuner_dem/step_emulation.hpp), checked against the thread counts it has.
 #include <fmt/core.h>
 #include <omp.h>
 
@@ -14,13 +14,13 @@
 #include <vector>
 
 #include "cli_shared.hpp"
-#include "contactlab/dem/force_model.hpp"
-#include "contactlab/dem/step_emulation.hpp"
 #include "contactlab/kernels/atomic_file.hpp"
 #include "contactlab/kernels/error.hpp"
 #include "contactlab/support/statistics.hpp"
 #include "contactlab/tuner/context.hpp"
 #include "contactlab/tuner/thread_emulation.hpp"
+#include "contactlab/tuner_dem/force_model.hpp"
+#include "contactlab/tuner_dem/step_emulation.hpp"
 #include "contactlab/tuner_model/emulation.hpp"
 #include "dem_start.hpp"
 

@@ -12,11 +12,11 @@
 #include <vector>
 
 #include "cli_shared.hpp"
-#include "contactlab/dem/force_model.hpp"
-#include "contactlab/dem/variant_study.hpp"
 #include "contactlab/kernels/atomic_file.hpp"
 #include "contactlab/kernels/error.hpp"
 #include "contactlab/support/statistics.hpp"
+#include "contactlab/tuner_dem/force_model.hpp"
+#include "contactlab/tuner_dem/variant_study.hpp"
 #include "dem_start.hpp"
 
 namespace contactlab::cli {
