@@ -157,8 +157,8 @@ def ratio_interval(numerator, denominator):
 
 def median_interval(values, level=0.95):
     """The median and its distribution-free interval (order statistics of a binomial(n, 1/2)),
-    as tuner_model/statistics.cpp computes it; reached is False where n is too small for the
-    level (the interval is then [min, max])."""
+    as kernels/support/src/statistics.cpp computes it; reached is False where n is too small for
+    the level (the interval is then [min, max])."""
     xs = sorted(values)
     n = len(xs)
     if n == 0:

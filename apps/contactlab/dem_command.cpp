@@ -15,8 +15,8 @@
 #include "contactlab/dem/checkpoint.hpp"
 #include "contactlab/dem/config.hpp"
 #include "contactlab/dem/discharge.hpp"
-#include "contactlab/dem/force_model.hpp"
 #include "contactlab/dem/output.hpp"
+#include "contactlab/tuner_dem/force_model.hpp"
 #include "dem_start.hpp"
 #ifdef CONTACTLAB_HAVE_CAIRO
 #include "contactlab/dem/picture.hpp"

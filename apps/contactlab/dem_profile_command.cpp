@@ -1,7 +1,7 @@
 // `contactlab dem profile`: the report's profile of a DEM step (Otsuka): the phase split at one
 // thread against its 80/15/5, the serial fraction, the Amdahl bound it implies against the
 // measured speed-up, and with --emulate the step at thread counts this machine does not have
-// (dem/step_emulation.hpp), checked against the thread counts it has.
+// (tuner_dem/step_emulation.hpp), checked against the thread counts it has.
 #include <fmt/core.h>
 #include <omp.h>
 
@@ -14,14 +14,14 @@
 #include <vector>
 
 #include "cli_shared.hpp"
-#include "contactlab/dem/force_model.hpp"
-#include "contactlab/dem/step_emulation.hpp"
 #include "contactlab/kernels/atomic_file.hpp"
 #include "contactlab/kernels/error.hpp"
+#include "contactlab/support/statistics.hpp"
 #include "contactlab/tuner/context.hpp"
 #include "contactlab/tuner/thread_emulation.hpp"
+#include "contactlab/tuner_dem/force_model.hpp"
+#include "contactlab/tuner_dem/step_emulation.hpp"
 #include "contactlab/tuner_model/emulation.hpp"
-#include "contactlab/tuner_model/statistics.hpp"
 #include "dem_start.hpp"
 
 namespace contactlab::cli {
@@ -43,7 +43,7 @@ struct Rounds {
     auto of = [&](double dem::PhaseTimes::*field) {
       std::vector<double> v;
       for (const dem::PhaseTimes& p : phases) v.push_back(p.*field);
-      return tn::median(v);
+      return median(v);
     };
     dem::PhaseTimes m;
     for (double dem::PhaseTimes::*f :
@@ -98,7 +98,7 @@ int DemProfileCommand::run() const {
     }
   }
   const dem::PhaseTimes one = measured.front().median_phases();
-  const double one_step = tn::median(measured.front().step_s);
+  const double one_step = median(measured.front().step_s);
   const double total = one.total_s();
   fmt::print("dem profile '{}': {} particles, variant {}, {} steps per run, {} round(s)\n\n",
              config.name, particles.size(), dem::to_string(variant), steps, rounds_);
@@ -127,7 +127,7 @@ int DemProfileCommand::run() const {
              "95% interval", "particle-steps/s", "speedup", "Amdahl bound", "Karp-Flatt e");
   nlohmann::json measured_json = nlohmann::json::array();
   for (const Rounds& m : measured) {
-    const tn::Summary s = tn::summarize(m.step_s);
+    const Summary s = summarize(m.step_s);
     const double speedup = one_step / s.median;
     const double p = m.threads;
     const std::string karp_flatt =
@@ -163,9 +163,9 @@ int DemProfileCommand::run() const {
     std::set<int> counts(emulate_.begin(), emulate_.end());
     for (const Rounds& m : measured) counts.insert(m.threads);
     const std::vector<int> all(counts.begin(), counts.end());
-    const std::vector<dem::EmulatedStep> emulated = dem::emulate_steps(
-        work, variant, costs, {1, one, one_step},
-        {widest.threads, widest.median_phases(), tn::median(widest.step_s)}, all);
+    const std::vector<dem::EmulatedStep> emulated =
+        dem::emulate_steps(work, variant, costs, {1, one, one_step},
+                           {widest.threads, widest.median_phases(), median(widest.step_s)}, all);
     const double base = emulated.front().step_s();
     fmt::print("\nemulated (force pass replayed by the force model, calibrated at 1 thread):\n");
     fmt::print("{:>7} {:>12} {:>9} {:>13}\n", "threads", "s/step", "speedup", "Amdahl bound");
@@ -183,7 +183,7 @@ int DemProfileCommand::run() const {
     }
     for (const Rounds& m : measured) {
       if (m.threads == 1) continue;
-      const double measured_s = tn::median(m.step_s), emulated_s = by_threads[m.threads];
+      const double measured_s = median(m.step_s), emulated_s = by_threads[m.threads];
       fmt::print("check at {} threads: measured {:.4g} s/step, emulated {:.4g} ({:+.1f}%)\n",
                  m.threads, measured_s, emulated_s,
                  100.0 * tn::relative_error(emulated_s, measured_s));

@@ -8,9 +8,9 @@
 
 #include "cli_shared.hpp"
 #include "contactlab/dem/config.hpp"
-#include "contactlab/dem/variant_study.hpp"
 #include "contactlab/kernels/atomic_file.hpp"
 #include "contactlab/kernels/error.hpp"
+#include "contactlab/tuner_dem/variant_study.hpp"
 #include "dem_start.hpp"
 
 namespace contactlab::cli {

@@ -12,11 +12,11 @@
 #include <vector>
 
 #include "cli_shared.hpp"
-#include "contactlab/dem/force_model.hpp"
-#include "contactlab/dem/variant_study.hpp"
 #include "contactlab/kernels/atomic_file.hpp"
 #include "contactlab/kernels/error.hpp"
-#include "contactlab/tuner_model/statistics.hpp"
+#include "contactlab/support/statistics.hpp"
+#include "contactlab/tuner_dem/force_model.hpp"
+#include "contactlab/tuner_dem/variant_study.hpp"
 #include "dem_start.hpp"
 
 namespace contactlab::cli {
@@ -134,7 +134,7 @@ int tune_dem(const DemTuneRequest& request) {
   }
   auto median_of = [](std::map<std::string, std::vector<double>>& m, const dem::ForceVariant& v) {
     auto& samples = m[dem::to_string(v)];
-    return samples.empty() ? 0.0 : tuner::median(samples);
+    return samples.empty() ? 0.0 : median(samples);
   };
   double best_measured = 0.0;
   for (const dem::ForceVariant& v : verified) {

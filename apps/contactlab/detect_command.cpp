@@ -25,7 +25,7 @@ struct DetectCommand {
   SceneOptions scene_;
   std::string variant_ = "particle/sorted/full/static,200";
   int threads_ = 0;
-  tn::RepetitionPolicy repetition_;  // its defaults are the options' defaults
+  RepetitionPolicy repetition_;  // its defaults are the options' defaults
   bool papi_ = false;
   std::string papi_events_;
   std::string cache_sim_;
@@ -105,7 +105,7 @@ void DetectCommand::check() const {
   }
 }
 
-void print_summary(const char* name, const tn::Summary& s) {
+void print_summary(const char* name, const Summary& s) {
   const std::string interval =
       s.count < 2 ? std::string("no interval from 1 sample")
                   : fmt::format("[{:.6f}, {:.6f}] covers the median with {:.1f}%", s.interval.low,
@@ -123,7 +123,7 @@ void print_run(const tn::RunRecord& run, std::size_t particles) {
              run.parameters.variant, run.parameters.threads, particles, w.grid[0], w.grid[1],
              w.grid[2], hashed_index ? "hashed" : "dense", w.max_cell_occupancy);
   fmt::print("{} repetitions after {} warm-up ({}), T_ALL = T_s + T_c:\n", a.repetitions,
-             a.warmup_runs, tn::to_string(a.stop_reason));
+             a.warmup_runs, to_string(a.stop_reason));
   print_summary("T_s", a.setup_s);
   print_summary("T_c", a.detect_s);
   print_summary("T_ALL", a.total_s);

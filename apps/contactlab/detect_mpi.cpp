@@ -82,12 +82,12 @@ tn::RunRecord make_record(const mpi::MpiRun& run, const MpiDetectRequest& reques
   record.samples.detect_s = run.repetitions.detect_s;
   record.samples.total_s = run.repetitions.total_s;
   record.samples.thread_busy_s.assign(run.repetitions.detect_s.size(), busy);
-  record.samples.imbalance.assign(run.repetitions.detect_s.size(), tn::load_imbalance(busy));
+  record.samples.imbalance.assign(run.repetitions.detect_s.size(), load_imbalance(busy));
   tn::RunAggregates a;
-  a.setup_s = tn::summarize(record.samples.setup_s);
-  a.detect_s = tn::summarize(record.samples.detect_s);
-  a.total_s = tn::summarize(record.samples.total_s);
-  a.imbalance = tn::summarize(record.samples.imbalance);
+  a.setup_s = summarize(record.samples.setup_s);
+  a.detect_s = summarize(record.samples.detect_s);
+  a.total_s = summarize(record.samples.total_s);
+  a.imbalance = summarize(record.samples.imbalance);
   a.thread_busy_median_s = busy;
   a.repetitions = static_cast<int>(run.repetitions.detect_s.size());
   a.warmup_runs = request.warmup;

@@ -92,7 +92,7 @@ struct EmulateThreadsCommand {
       options.measured_threads = int_list(measured_, "--measured-threads");
     }
     options.rounds = rounds_;
-    tn::validate(options);
+    validate(options);
     auto [scene, record] = scene_.load();
     tn::TuningCache cache(cache_file_.empty() ? tn::TuningCache::default_path() : cache_file_);
     const tn::Calibration calibration = tn::machine_calibration(
@@ -244,11 +244,11 @@ int EmulateMpiCommand::run() const {
                           part_samples[i + 1].end());
     break;
   }
-  const double one_thread_s = tn::median(anchor_samples);
-  const double fixed_s = std::min(tn::median(part_samples[0]), one_thread_s / 2);
-  std::vector<tn::Summary> slowest_measured;
+  const double one_thread_s = median(anchor_samples);
+  const double fixed_s = std::min(median(part_samples[0]), one_thread_s / 2);
+  std::vector<Summary> slowest_measured;
   for (std::size_t k = 1; k < parts.size(); ++k) {
-    slowest_measured.push_back(tn::summarize(part_samples[k]));
+    slowest_measured.push_back(summarize(part_samples[k]));
   }
   const tn::AnchoredLoop loop(prepared, costs, variant.schedule, one_thread_s - fixed_s);
   // The deal's locality at P processes: the slowest rank of P timed alone over its replay (the
@@ -344,7 +344,7 @@ int EmulateMpiCommand::run() const {
                            {"speedup", speedup},
                            {"efficiency", speedup / procs}};
       if (&s == &series.front() && !slowest_measured.empty()) {
-        const tn::Summary& alone = slowest_measured[i];
+        const Summary& alone = slowest_measured[i];
         point["slowest_rank"] = slowest_rank[i];
         point["slowest_rank_measured_s"] = tn::interval_json(alone);
         fmt::print(

@@ -11,10 +11,10 @@
 #include <vector>
 
 #include "contactlab/kernels/scene_generate.hpp"
+#include "contactlab/support/statistics.hpp"
 #include "contactlab/tuner/measured_kernel.hpp"
 #include "contactlab/tuner/tune.hpp"
 #include "contactlab/tuner_model/cost_calibration.hpp"
-#include "contactlab/tuner_model/statistics.hpp"
 #include "methods/methods.hpp"
 
 namespace contactlab::tuner {

@@ -12,7 +12,7 @@
 #include "contactlab/kernels/error.hpp"
 #include "contactlab/kernels/rng.hpp"
 #include "contactlab/kernels/scene_options.hpp"
-#include "contactlab/tuner/json_reader.hpp"
+#include "contactlab/support/json_reader.hpp"
 
 namespace contactlab::tuner {
 namespace {

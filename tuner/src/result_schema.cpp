@@ -138,7 +138,7 @@ struct FieldTable<RepetitionPolicy> {
                  field("level", &T::level)};
   static void validate(const JsonIn& in, const T& v) {
     try {
-      tuner::validate(v);
+      contactlab::validate(v);
     } catch (const InputError& e) {
       in.fail(e.what());
     }
@@ -357,16 +357,12 @@ struct FieldTable<ResultFile> {
 };
 
 // The public entry points: writing and strict reading, both from the tables above.
-void to_json(json& j, const Summary& v) { j = to_json_value(v); }
 void to_json(json& j, const CounterRecord& v) { j = to_json_value(v); }
 void to_json(json& j, const Context& v) { j = to_json_value(v); }
 void to_json(json& j, const SceneRecord& v) { j = to_json_value(v); }
 void to_json(json& j, const RunRecord& v) { j = to_json_value(v); }
 void to_json(json& j, const ResultFile& v) { j = to_json_value(v); }
 
-void read(const JsonIn& in, Summary& out) { read_record(in, out); }
-void read(const JsonIn& in, MedianInterval& out) { read_record(in, out); }
-void read(const JsonIn& in, RepetitionPolicy& out) { read_record(in, out); }
 void read(const JsonIn& in, EventCount& out) { read_record(in, out); }
 void read(const JsonIn& in, CacheLevel& out) { read_record(in, out); }
 void read(const JsonIn& in, CacheGeometry& out) { read_record(in, out); }
@@ -421,3 +417,12 @@ void write_result_file(const std::string& path, const ResultFile& result) {
 }
 
 }  // namespace contactlab::tuner
+
+namespace contactlab {
+
+void to_json(nlohmann::json& j, const Summary& v) { j = tuner::to_json_value(v); }
+void read(const JsonIn& in, Summary& out) { tuner::read_record(in, out); }
+void read(const JsonIn& in, MedianInterval& out) { tuner::read_record(in, out); }
+void read(const JsonIn& in, RepetitionPolicy& out) { tuner::read_record(in, out); }
+
+}  // namespace contactlab

@@ -13,10 +13,10 @@
 #include <random>
 
 #include "contactlab/kernels/error.hpp"
+#include "contactlab/support/statistics.hpp"
 #include "contactlab/tuner/context.hpp"
 #include "contactlab/tuner/tuning_method.hpp"
 #include "contactlab/tuner_model/chunk_formulas.hpp"
-#include "contactlab/tuner_model/statistics.hpp"
 
 namespace contactlab::tuner {
 namespace {

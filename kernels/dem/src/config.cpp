@@ -10,14 +10,12 @@
 
 #include "contactlab/kernels/error.hpp"
 #include "contactlab/kernels/rng.hpp"
-#include "contactlab/tuner/json_reader.hpp"
+#include "contactlab/support/json_reader.hpp"
 
 namespace contactlab::dem {
 namespace {
 
 using nlohmann::json;
-using tuner::JsonIn;
-using tuner::ObjectIn;
 constexpr double kHuge = 1e300;
 
 // A number field: required without a fallback; checked against (low, high] or [low, high].
@@ -26,7 +24,7 @@ double number(ObjectIn& o, const std::string& key, std::optional<double> fallbac
   const std::optional<JsonIn> in = fallback ? o.optional_field(key) : o.field(key);
   if (!in) return *fallback;
   double v = 0;
-  tuner::read(*in, v);
+  contactlab::read(*in, v);
   if (!std::isfinite(v) || v > high || (low_open ? v <= low : v < low)) {
     // No upper bound worth printing where `high` is kHuge: "must be > 0", not "(0.0, 1e+300]".
     const std::string bound = high >= kHuge
@@ -42,7 +40,7 @@ std::string text(ObjectIn& o, const std::string& key, std::optional<std::string>
   const std::optional<JsonIn> in = fallback ? o.optional_field(key) : o.field(key);
   if (!in) return *fallback;
   std::string v;
-  tuner::read(*in, v);
+  contactlab::read(*in, v);
   return v;
 }
 
@@ -50,7 +48,7 @@ Vec3 vec(ObjectIn& o, const std::string& key, std::optional<Vec3> fallback) {
   const std::optional<JsonIn> in = fallback ? o.optional_field(key) : o.field(key);
   if (!in) return *fallback;
   Vec3 v{};
-  tuner::read(*in, v);
+  contactlab::read(*in, v);
   for (double c : v) {
     if (!std::isfinite(c)) in->fail("must be finite");
   }
@@ -81,7 +79,7 @@ ContactLaw parse_contact(const JsonIn& in) {
   law.tangential_damping_ratio = number(o, "tangential_damping_ratio", 0.5, 0.0, kHuge);
   law.rolling_friction = number(o, "rolling_friction", 0.0, 0.0, kHuge);
   if (const auto clamp = o.optional_field("clamp_normal_force")) {
-    tuner::read(*clamp, law.clamp_normal_force);
+    contactlab::read(*clamp, law.clamp_normal_force);
   }
   o.finish();
   if (law.kind == NormalLawKind::kStiffness) {
@@ -193,7 +191,7 @@ DemConfig parse_dem_config(const json& document) {
   ObjectIn o(root);
   const JsonIn version_in = o.field("schema_version");
   int version = 0;
-  tuner::read(version_in, version);
+  contactlab::read(version_in, version);
   if (version != kDemConfigSchemaVersion) {
     version_in.fail("version " + std::to_string(version) + " is not supported (expected " +
                     std::to_string(kDemConfigSchemaVersion) + ")");
@@ -209,7 +207,7 @@ DemConfig parse_dem_config(const json& document) {
     ObjectIn d(o.field("domain"));
     s.domain.lo = vec(d, "lo", std::nullopt);
     s.domain.hi = vec(d, "hi", std::nullopt);
-    if (const auto p = d.optional_field("periodic")) tuner::read(*p, s.domain.periodic);
+    if (const auto p = d.optional_field("periodic")) contactlab::read(*p, s.domain.periodic);
     d.finish();
     for (int a = 0; a < 3; ++a) {
       if (!(s.domain.hi[a] > s.domain.lo[a])) o.field("domain").fail("hi must be above lo");
@@ -263,7 +261,7 @@ DemConfig parse_dem_config(const json& document) {
     for (const Material& m : c.materials) {
       if (m.name == name) return;
     }
-    throw tuner::SchemaError(where + ".material: unknown material '" + name + "'");
+    throw SchemaError(where + ".material: unknown material '" + name + "'");
   };
   for (std::size_t k = 0; k < c.particles.size(); ++k) {
     known(c.particles[k].material, "$.particles[" + std::to_string(k) + "]");
@@ -285,7 +283,7 @@ DemConfig read_dem_config(const std::string& path) {
   }
   try {
     return parse_dem_config(document);
-  } catch (const tuner::SchemaError& e) {
+  } catch (const SchemaError& e) {
     throw InputError(path + ": " + e.what());
   }
 }

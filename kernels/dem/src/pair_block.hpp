@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "contactlab/dem/contact_law.hpp"
+#include "contactlab/dem/force_variant.hpp"  // kRowsPerBlock
 #include "contactlab/dem/pair_list.hpp"
 #include "kin_columns.hpp"
 
@@ -26,9 +27,6 @@ constexpr std::size_t kKinStride = 12;
 constexpr std::size_t kAccStride = 8;
 // How many pairs ahead the pair kernel prefetches its partner's data.
 constexpr std::size_t kPartnerAhead = 8;
-// Rows per block of the pair pass: enough pairs (about 4 a row) for full SIMD lanes, few enough
-// that a block's records are still in L1 when their particles are summed.
-constexpr std::size_t kRowsPerBlock = 64;
 
 // 1 / k_t of a contact of reduced mass m_star [kg] (0 where k_t is 0): per pair it is a
 // constant of the list (PairList::inv_kt), per wall contact computed on the spot.

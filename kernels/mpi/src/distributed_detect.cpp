@@ -14,7 +14,7 @@
 #include "contactlab/kernels/partition.hpp"
 #include "contactlab/kernels/scene_io.hpp"
 #include "contactlab/mpi/runtime.hpp"
-#include "contactlab/tuner_model/statistics.hpp"
+#include "contactlab/support/statistics.hpp"
 
 namespace contactlab::mpi {
 
@@ -417,8 +417,8 @@ MpiRun finish(MPI_Comm comm, PreparedRun& prepared, const DetectOptions& options
       detect[r] = run.detect_s;
       total[r] = run.setup_s + run.detect_s;
     }
-    report.registration_s = tuner::median(setup);
-    report.detection_s = tuner::median(detect);
+    report.registration_s = median(setup);
+    report.detection_s = median(detect);
     const double output_start = MPI_Wtime();
     // Replicated: rows of other ranks' homes are empty (full stencil) or hold pairs found here
     // (half). Decomposed: rows below `owned` are the owned particles.

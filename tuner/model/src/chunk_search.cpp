@@ -94,7 +94,7 @@ class GridSearch {
     }
     entry.samples_seconds.insert(entry.samples_seconds.end(), samples.begin(), samples.end());
     entry.evaluations += 1;
-    entry.median_seconds = contactlab::tuner::median(entry.samples_seconds);
+    entry.median_seconds = contactlab::median(entry.samples_seconds);
     entry.interval = median_interval(entry.samples_seconds, options_.level);
     return true;
   }

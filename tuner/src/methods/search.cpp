@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "contactlab/kernels/error.hpp"
-#include "contactlab/tuner_model/statistics.hpp"
+#include "contactlab/support/statistics.hpp"
 #include "methods.hpp"
 
 namespace contactlab::tuner {

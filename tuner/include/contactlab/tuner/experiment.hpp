@@ -10,7 +10,7 @@
 
 #include "contactlab/kernels/scene_generate.hpp"
 #include "contactlab/kernels/variant.hpp"
-#include "contactlab/tuner_model/statistics.hpp"
+#include "contactlab/support/statistics.hpp"
 
 namespace contactlab::tuner {
 

@@ -35,7 +35,7 @@
 #include <utility>
 #include <vector>
 
-#include "contactlab/tuner/json_reader.hpp"
+#include "contactlab/support/json_reader.hpp"
 
 namespace contactlab::tuner {
 
@@ -53,8 +53,20 @@ template <class T>
 nlohmann::json to_json_value(const T& value);
 template <Described T>
 void read_record(const JsonIn& in, T& out);
-template <Described T>
+
+}  // namespace contactlab::tuner
+
+namespace contactlab {
+
+// A record with a table is read by it. Declared beside JsonIn (contactlab::support), where
+// argument-dependent lookup finds it for a record of any namespace, an unnamed one included:
+// json_reader.hpp's templates read the vectors, maps and optionals of records that way.
+template <tuner::Described T>
 void read(const JsonIn& in, T& out);
+
+}  // namespace contactlab
+
+namespace contactlab::tuner {
 
 // Values go through to_json_value and read.
 struct PlainCodec {
@@ -78,7 +90,7 @@ struct EnumCodec {
   template <class E>
   void decode(const JsonIn& in, E& out) const {
     std::string text;
-    tuner::read(in, text);
+    contactlab::read(in, text);
     out = Parse(text);
   }
 };
@@ -271,9 +283,13 @@ void read_record(const JsonIn& in, T& out) {
   if constexpr (requires { FieldTable<T>::validate(in, out); }) FieldTable<T>::validate(in, out);
 }
 
-template <Described T>
+}  // namespace contactlab::tuner
+
+namespace contactlab {
+
+template <tuner::Described T>
 void read(const JsonIn& in, T& out) {
-  read_record(in, out);
+  tuner::read_record(in, out);
 }
 
-}  // namespace contactlab::tuner
+}  // namespace contactlab

@@ -16,10 +16,10 @@
 
 #include "contactlab/kernels/scene.hpp"
 #include "contactlab/kernels/scene_generate.hpp"
+#include "contactlab/support/json_reader.hpp"
+#include "contactlab/support/statistics.hpp"
 #include "contactlab/tuner/context.hpp"
 #include "contactlab/tuner/counter_record.hpp"
-#include "contactlab/tuner/json_reader.hpp"
-#include "contactlab/tuner_model/statistics.hpp"
 
 namespace contactlab::tuner {
 
@@ -143,7 +143,6 @@ struct ResultFile {
 };
 
 // Writing.
-void to_json(nlohmann::json& j, const Summary& v);
 void to_json(nlohmann::json& j, const CounterRecord& v);
 void to_json(nlohmann::json& j, const Context& v);
 void to_json(nlohmann::json& j, const SceneRecord& v);
@@ -151,9 +150,6 @@ void to_json(nlohmann::json& j, const RunRecord& v);
 void to_json(nlohmann::json& j, const ResultFile& v);
 
 // Strict reading (JsonIn carries the path for messages).
-void read(const JsonIn& in, Summary& out);
-void read(const JsonIn& in, MedianInterval& out);
-void read(const JsonIn& in, RepetitionPolicy& out);
 void read(const JsonIn& in, EventCount& out);
 void read(const JsonIn& in, CacheLevel& out);
 void read(const JsonIn& in, CacheGeometry& out);
@@ -190,3 +186,15 @@ ResultFile read_result_file(const std::string& path);
 void write_result_file(const std::string& path, const ResultFile& result);
 
 }  // namespace contactlab::tuner
+
+namespace contactlab {
+
+// The statistics' records (contactlab::support) as result files hold them, from the tables in
+// result_schema.cpp; declared beside their types, where argument-dependent lookup finds them
+// (a vector or a map of them is read by json_reader.hpp's templates, nlohmann calls to_json).
+void to_json(nlohmann::json& j, const Summary& v);
+void read(const JsonIn& in, Summary& out);
+void read(const JsonIn& in, MedianInterval& out);
+void read(const JsonIn& in, RepetitionPolicy& out);
+
+}  // namespace contactlab

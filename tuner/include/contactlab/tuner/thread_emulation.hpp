@@ -10,8 +10,8 @@
 
 #include "contactlab/kernels/scene.hpp"
 #include "contactlab/kernels/variant.hpp"
+#include "contactlab/support/statistics.hpp"
 #include "contactlab/tuner/tune.hpp"
-#include "contactlab/tuner_model/statistics.hpp"
 
 namespace contactlab::tuner {
 

@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "contactlab/tuner/json_reader.hpp"
+#include "contactlab/support/json_reader.hpp"
 #include "contactlab/tuner/result_schema.hpp"
 
 namespace contactlab::tuner {

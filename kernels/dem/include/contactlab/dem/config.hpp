@@ -63,7 +63,7 @@ struct DemConfig {
   double output_every_s = 0.0;  // frames and energy rows; 0 = only the first and the last
 };
 
-// Throws tuner::SchemaError (an InputError) with the JSON path of the first problem.
+// Throws SchemaError (an InputError) with the JSON path of the first problem.
 DemConfig parse_dem_config(const nlohmann::json& document);
 DemConfig read_dem_config(const std::string& path);
 

@@ -6,6 +6,7 @@
 // "atomic/guided,16/walls=serial".
 #pragma once
 
+#include <cstddef>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -25,6 +26,11 @@ namespace contactlab::dem {
 // the thread that owns it (no shared writes, any schedule): the sums of kOrdered in its order,
 // bit-identical to it for any thread count and schedule, for twice the pair work.
 enum class Accumulation { kOrdered, kPerThread, kAtomic, kFullList };
+
+// Rows per block of the pair pass, the unit its schedule deals out (and the force model counts
+// work in): enough pairs (about 4 a row) for full SIMD lanes, few enough that a block's records
+// are still in L1 when their particles are summed.
+inline constexpr std::size_t kRowsPerBlock = 64;
 
 struct ForceVariant {
   Accumulation accumulation = Accumulation::kOrdered;

@@ -17,8 +17,8 @@
 #include <span>
 #include <vector>
 
+#include "contactlab/support/statistics.hpp"
 #include "contactlab/tuner_model/schedule_model.hpp"
-#include "contactlab/tuner_model/statistics.hpp"
 
 namespace contactlab::tuner {
 

@@ -1,4 +1,4 @@
-#include "contactlab/dem/step_emulation.hpp"
+#include "contactlab/tuner_dem/step_emulation.hpp"
 
 #include "contactlab/kernels/error.hpp"
 #include "contactlab/tuner_model/emulation.hpp"

@@ -1,4 +1,4 @@
-#include "contactlab/dem/force_model.hpp"
+#include "contactlab/tuner_dem/force_model.hpp"
 
 #include <omp.h>
 
@@ -7,12 +7,10 @@
 
 #include "contactlab/kernels/error.hpp"
 #include "contactlab/tuner_model/schedule_model.hpp"
-#include "pair_block.hpp"
 
 namespace contactlab::dem {
 namespace {
 
-using detail::kRowsPerBlock;
 using tuner::MachineCosts;
 using tuner::ScheduleOutcome;
 using tuner::WorkView;

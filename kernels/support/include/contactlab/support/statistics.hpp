@@ -9,7 +9,7 @@
 #include <string_view>
 #include <vector>
 
-namespace contactlab::tuner {
+namespace contactlab {
 
 // Median of the values (mean of the two middle ones for an even count). Throws InputError for
 // an empty input or a NaN.
@@ -134,4 +134,4 @@ RepetitionOutcome repeat_measurement(const RepetitionPolicy& policy,
                                      const std::function<void()>& warm_up,
                                      const std::function<double()>& sample);
 
-}  // namespace contactlab::tuner
+}  // namespace contactlab

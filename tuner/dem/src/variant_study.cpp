@@ -1,4 +1,4 @@
-#include "contactlab/dem/variant_study.hpp"
+#include "contactlab/tuner_dem/variant_study.hpp"
 
 #include <omp.h>
 

@@ -9,9 +9,9 @@
 #include <vector>
 
 #include "contactlab/kernels/error.hpp"
-#include "contactlab/tuner_model/statistics.hpp"
+#include "contactlab/support/statistics.hpp"
 
-namespace contactlab::tuner {
+namespace contactlab {
 namespace {
 
 std::vector<double> one_to(int n) {
@@ -308,4 +308,4 @@ TEST(StopReason, RoundTripsThroughText) {
 }
 
 }  // namespace
-}  // namespace contactlab::tuner
+}  // namespace contactlab

@@ -7,7 +7,7 @@
 #include <memory>
 #include <numeric>
 
-#include "contactlab/dem/force_model.hpp"
+#include "contactlab/tuner_dem/force_model.hpp"
 #include "dem_support.hpp"
 
 namespace contactlab::dem {

@@ -14,7 +14,7 @@
 
 #include "contactlab/kernels/error.hpp"
 
-namespace contactlab::tuner {
+namespace contactlab {
 
 // A result or config file that does not follow its schema.
 class SchemaError : public InputError {
@@ -155,4 +155,4 @@ nlohmann::json optional_json(const std::optional<T>& value) {
   return value ? nlohmann::json(*value) : nlohmann::json(nullptr);
 }
 
-}  // namespace contactlab::tuner
+}  // namespace contactlab

@@ -1,4 +1,4 @@
-#include "contactlab/tuner_model/statistics.hpp"
+#include "contactlab/support/statistics.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -10,7 +10,7 @@
 
 #include "contactlab/kernels/error.hpp"
 
-namespace contactlab::tuner {
+namespace contactlab {
 namespace {
 
 std::vector<double> sorted_copy(std::span<const double> values, const char* function) {
@@ -285,4 +285,4 @@ RepetitionOutcome repeat_measurement(const RepetitionPolicy& policy,
   return outcome;
 }
 
-}  // namespace contactlab::tuner
+}  // namespace contactlab

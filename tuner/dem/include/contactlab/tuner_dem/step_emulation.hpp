@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "contactlab/dem/engine.hpp"
-#include "contactlab/dem/force_model.hpp"
+#include "contactlab/tuner_dem/force_model.hpp"
 
 namespace contactlab::dem {
 
