@@ -126,6 +126,7 @@ void ContactDetector::detect(const CellGrid& grid, const Layout& layout, const P
     if (options.observer) options.observer->thread_begin(tid);
     const double loop_start = omp_get_wtime();
     traversal::traverse(spec, layout, op);
+    op.homes_done();
     run.thread_busy_s[tid] = omp_get_wtime() - loop_start;
     thread_tests[tid] = op.tests();
     if (options.observer) options.observer->thread_end(tid);

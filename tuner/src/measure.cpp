@@ -86,6 +86,11 @@ RunRecord measure_detection(ContactDetector& detector, const Scene& scene,
                         {"hashed_index", last.hashed_index ? 1u : 0u},
                         {"tiled", last.tiled ? 1u : 0u},
                         {"cell_index_bytes", last.index_bytes}};
+  // What the detector keeps after a run (ContactDetector::buffer_bytes): memory per particle,
+  // and the reverse entries passed between threads, which may grow with the thread count.
+  const ContactDetector::BufferBytes kept = detector.buffer_bytes();
+  record.work_counts["detector_bytes"] = kept.total;
+  record.work_counts["detector_spill_bytes"] = kept.spill_bytes;
 
   const auto [lo, hi] = std::minmax_element(contact_counts.begin(), contact_counts.end());
   if (*lo != *hi) {

@@ -339,8 +339,8 @@ std::vector<int> log2_chunk_grid(int largest_chunk) {
 
 std::vector<int> balanced_chunk_grid(std::span<const int> grid, std::size_t iterations,
                                      int threads) {
-  const std::uint64_t largest =
-      iterations / (std::uint64_t{kMinChunksPerThread} * static_cast<std::uint64_t>(std::max(1, threads)));
+  const std::uint64_t largest = iterations / (std::uint64_t{kMinChunksPerThread} *
+                                              static_cast<std::uint64_t>(std::max(1, threads)));
   std::vector<int> kept;
   for (const int chunk : grid) {
     if (static_cast<std::uint64_t>(chunk) <= largest) kept.push_back(chunk);

@@ -22,7 +22,9 @@ class PartnerBuffer {
   ~PartnerBuffer();
 
   std::size_t size() const { return size_; }
+  std::size_t capacity() const { return capacity_; }
   const std::uint32_t* data() const { return data_; }
+  std::uint32_t* data() { return data_; }
   void clear() { size_ = 0; }
   // Empties the buffer and writes to `storage` (room for `capacity` entries, not owned) until
   // it would overflow. Memory of its own is freed.

@@ -1,0 +1,161 @@
+#!/usr/bin/env python3
+"""The detection measured on a machine of many cores (scripts/device-16core), as one page.
+
+  analysis/device_summary.py RESULTS_DIR [--out RESULTS_DIR/summary.md]
+
+Reads, where present: detection-16-sorted.json and detection-16-paper.json (sweeps at 1-16
+threads), chunk-study-16.json, large-scenes/*.json (detect at 1 and 16 threads on larger scenes)
+and at-<commit>/paper-tables-16.json (an earlier commit's sweep, for the change). Writes speed-up
+tables (median T_ALL over all samples; the phases T_s, the slowest thread's loop and the assembly
+after it), the chunk study's best per stencil and schedule kind, and the larger scenes' time and
+memory per particle. Every number is measured; nothing here is emulated.
+"""
+import argparse
+import glob
+import json
+import os
+import statistics
+import sys
+
+
+def runs_of(path):
+    with open(path) as f:
+        doc = json.load(f)
+    points = {}
+    for run in doc["runs"]:
+        if run["status"] != "ok":
+            continue
+        p, s = run["parameters"], run["samples"]
+        busy = [max(b) if b else 0.0 for b in s["thread_busy_s"]]
+        points[(p["variant"], p["threads"])] = {
+            "total": statistics.median(s["total_s"]),
+            "setup": statistics.median(s["setup_s"]),
+            "loop": statistics.median(busy),
+            "assembly": statistics.median([d - b for d, b in zip(s["detect_s"], busy)]),
+            "imbalance": statistics.median(s["imbalance"]),
+            "samples": len(s["total_s"]),
+            "work": run.get("work_counts", {}),
+            "scene_n": p["scene"]["n"],
+        }
+    return doc["context"], points
+
+
+def speedup_table(points, title):
+    variants = sorted({v for v, _ in points})
+    threads = sorted({t for _, t in points})
+    lines = [f"### {title}", "",
+             "| variant | " + " | ".join(f"{t} thr T_ALL [s] (x)" for t in threads) +
+             " | T_s 1 -> max (x) | assembly 1 -> max [s] |",
+             "|---|" + "---|" * (len(threads) + 2)]
+    for v in variants:
+        one = points.get((v, 1))
+        if not one:
+            continue
+        cells = []
+        for t in threads:
+            p = points.get((v, t))
+            cells.append(f"{p['total']:.4f} ({one['total'] / p['total']:.2f})" if p else "-")
+        top = points.get((v, threads[-1]), one)
+        cells.append(f"{one['setup']:.4f} -> {top['setup']:.4f} ({one['setup'] / top['setup']:.1f})")
+        cells.append(f"{one['assembly']:.4f} -> {top['assembly']:.4f}")
+        lines.append(f"| `{v}` | " + " | ".join(cells) + " |")
+    return lines
+
+
+def best_over_best(points):
+    threads = sorted({t for _, t in points})
+    best = {}
+    for t in threads:
+        at = [(p["total"], v) for (v, tt), p in points.items() if tt == t]
+        best[t] = min(at)
+    one = best[threads[0]][0]
+    return [f"- fastest at {t} thread(s): `{v}` {s:.4f} s, {one / s:.2f}x the fastest at "
+            f"{threads[0]}" for t, (s, v) in best.items()]
+
+
+def chunk_lines(points):
+    lines = ["### The chunk study at 16 threads (measured)", "",
+             "| loop | block T_ALL [s] | best static,k | best dynamic,k |", "|---|---|---|---|"]
+    for stencil in ("full", "half"):
+        base = f"particle/sorted/{stencil}/static"
+        block = points.get((base, 16))
+        row = [f"`particle/sorted/{stencil}`", f"{block['total']:.4f}" if block else "-"]
+        for kind in ("static", "dynamic"):
+            prefix = f"particle/sorted/{stencil}/{kind},"
+            found = [(p["total"], v) for (v, t), p in points.items() if v.startswith(prefix)]
+            if found:
+                s, v = min(found)
+                row.append(f"`{v.split('/')[-1]}` {s:.4f}" +
+                           (f" ({block['total'] / s:.2f}x the block)" if block else ""))
+            else:
+                row.append("-")
+        lines.append("| " + " | ".join(row) + " |")
+    return lines
+
+
+def large_lines(folder):
+    files = sorted(glob.glob(os.path.join(folder, "large-scenes", "*.json")))
+    if not files:
+        return []
+    rows = {}
+    for path in files:
+        _, points = runs_of(path)
+        for (v, t), p in points.items():
+            rows[(p["scene_n"], v, t)] = p
+    lines = ["### Larger scenes (the paper's law, D scaled to keep the contacts per particle)", "",
+             "| N | variant | threads | T_ALL [s] | T_s [s] | per 10^6 particles [s] | "
+             "contact pairs / N | detector bytes / N |", "|---|---|---|---|---|---|---|---|"]
+    for (n, v, t), p in sorted(rows.items()):
+        kept = p["work"].get("detector_bytes")
+        lines.append(f"| {n:,} | `{v}` | {t} | {p['total']:.4f} | {p['setup']:.4f} | "
+                     f"{p['total'] / n * 1e6:.4f} | {p['work'].get('contact_pairs', 0) / n:.2f} | "
+                     f"{kept / n:.0f} |" if kept else
+                     f"| {n:,} | `{v}` | {t} | {p['total']:.4f} | {p['setup']:.4f} | "
+                     f"{p['total'] / n * 1e6:.4f} | {p['work'].get('contact_pairs', 0) / n:.2f} | "
+                     f"- |")
+    return lines
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("folder")
+    parser.add_argument("--out")
+    args = parser.parse_args()
+    out = args.out or os.path.join(args.folder, "summary.md")
+    lines = [f"# Detection on {os.path.basename(os.path.normpath(args.folder))}: measured", "",
+             "Generated by `analysis/device_summary.py` from the result files beside it (medians "
+             "of every sample; x = speed-up over one thread). Measured, not emulated.", ""]
+    found = False
+    for name, title in (("detection-16-sorted.json", "Sorted variants (issue #47's targets)"),
+                        ("detection-16-paper.json", "The paper's other loops")):
+        path = os.path.join(args.folder, name)
+        if os.path.exists(path):
+            found = True
+            context, points = runs_of(path)
+            build = context.get("build", {})
+            lines += speedup_table(points, f"{title}: `{name}`") + [""]
+            lines += best_over_best(points) + [""]
+            lines.append(f"Build: {build.get('flags', '?')} (native: {build.get('native')}); "
+                         f"SIMD target: {context.get('simd_target', '?')}.")
+            lines.append("")
+    for old in sorted(glob.glob(os.path.join(args.folder, "at-*", "paper-tables-16.json"))):
+        _, points = runs_of(old)
+        lines += speedup_table(points, f"The same at {old.split(os.sep)[-2][3:]}: "
+                                       f"`{os.path.relpath(old, args.folder)}`") + [""]
+    chunk = os.path.join(args.folder, "chunk-study-16.json")
+    if os.path.exists(chunk):
+        found = True
+        lines += chunk_lines(runs_of(chunk)[1]) + [""]
+    large = large_lines(args.folder)
+    lines += large + ([""] if large else [])
+    if not found and not large:
+        sys.exit(f"device_summary: {args.folder}: no result file of scripts/device-16core")
+    tmp = out + ".tmp"
+    with open(tmp, "w") as f:
+        f.write("\n".join(lines))
+    os.replace(tmp, out)
+    print(f"wrote {out}")
+
+
+if __name__ == "__main__":
+    main()
