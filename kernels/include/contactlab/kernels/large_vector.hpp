@@ -25,7 +25,7 @@ namespace contactlab {
 // 17 lines of 64 B apart: distinct sets modulo 4 KiB and 16 KiB; lines stay 64-byte aligned.
 namespace large_vector_detail {
 inline constexpr std::size_t kHugePage = std::size_t{2} << 20;
-inline constexpr std::size_t kColourStep = 17 * 64;  // bytes
+inline constexpr std::size_t kColourStep = std::size_t{17} * 64;  // bytes
 inline constexpr std::size_t kColours = 8;
 
 inline std::size_t next_colour_offset() {
@@ -64,8 +64,8 @@ struct HugePageAllocator {
       std::free(p);
       return;
     }
-    const auto address = reinterpret_cast<std::uintptr_t>(p);
-    std::free(reinterpret_cast<void*>(address & ~std::uintptr_t{kHugePage - 1}));
+    const auto offset = reinterpret_cast<std::uintptr_t>(p) & std::uintptr_t{kHugePage - 1};
+    std::free(reinterpret_cast<char*>(p) - offset);
   }
   // resize() default-initialises (no zeroing of trivial types): every user writes all of a
   // buffer before it reads it, and the first write, in the parallel loops, places the pages
