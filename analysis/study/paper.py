@@ -276,7 +276,9 @@ def _table6_reading(simulated, paper_rows):
                  "the staggered allocations or an 8-way L1 of the same size: about 0.13 misses per "
                  "test sorted (docs/measurement.md, 'Table 6 with the simulated FX10').")
     else:
-        text += " Reordering cuts the L1 misses per test of both loops, as it cuts the paper's rates."
+        text += (" Reordering cuts the L1 misses per test of both loops, as it cuts the paper's "
+                 "rates. The rates themselves differ from the paper's as far as the two codes' "
+                 "accesses per test may, which the paper does not give (docs/measurement.md).")
     return text
 
 
