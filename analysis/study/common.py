@@ -17,6 +17,7 @@ import matplotlib.pyplot as plt  # noqa: E402  (the backend must be chosen first
 EMULATED = "†"
 PREDICTED = "§"
 SHORT_INTERVAL = "‡"  # fewer than 6 samples: the interval is [min, max] and cannot reach 95 %
+NATIVE_DIVISOR = "¶"  # Table 6: per test divided by the native run's tests (older files)
 
 FOOTNOTE_EMULATED = (f"{EMULATED} emulated, not measured: `contactlab emulate threads` (and `dem "
                      "profile --emulate`) price the loop's exact work per iteration with costs "

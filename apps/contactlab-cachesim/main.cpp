@@ -12,6 +12,7 @@
 #include "contactlab/kernels/detector.hpp"
 #include "contactlab/kernels/error.hpp"
 #include "contactlab/kernels/scene_io.hpp"
+#include "contactlab/kernels/simd.hpp"
 
 #if CONTACTLAB_HAVE_CALLGRIND_H
 #include <valgrind/callgrind.h>
@@ -73,7 +74,10 @@ int main(int argc, char** argv) {  // NOLINT(bugprone-exception-escape)
     CallgrindRegion region;
     cl::ContactDetector detector;
     const cl::DetectRun run = detector.run(scene, {variant, diameter, threads, &region});
-    fmt::print("contacts {}\n", run.contact_pairs);
+    // Read by the parent (simulate_caches): the simulated run's own work, which can differ from
+    // the native run's (no SIMD here, so no tiles), and the SIMD target it ran.
+    fmt::print("contacts {}\ncandidate_tests {}\nsimd_target {}\n", run.contact_pairs,
+               run.candidate_tests, cl::simd_target());
     return 0;
   } catch (const CLI::ParseError& e) {
     return app.exit(e);

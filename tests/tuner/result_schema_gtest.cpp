@@ -47,7 +47,9 @@ ResultFile sample_result() {
                        1,
                        0.5,
                        "/usr/bin/contactlab-cachesim",
-                       "x86-64"};
+                       "x86-64",
+                       222,
+                       "off"};
   run.counters.push_back(simulated);
   CounterRecord papi;
   papi.source = "papi";
@@ -294,8 +296,8 @@ TEST(ResultSchema, RunsWithoutPhasesStillRead) {
 // with their empty values).
 TEST(ResultSchema, CommittedResultFilesRead) {
   namespace fs = std::filesystem;
-  const std::set<std::string> newer{"phases", "work_counts", "executable", "code_isa",
-                                    "simd_target"};
+  const std::set<std::string> newer{"phases",   "work_counts", "executable",
+                                    "code_isa", "simd_target", "candidate_tests"};
   int files = 0;
   for (const auto& entry :
        fs::recursive_directory_iterator(fs::path(CONTACTLAB_SOURCE_DIR) / "results")) {

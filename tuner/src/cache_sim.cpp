@@ -176,6 +176,25 @@ int run_process(const std::vector<std::string>& argv, const std::string& log, st
   return status;
 }
 
+// The simulated run's own report (apps/contactlab-cachesim prints "candidate_tests N" and
+// "simd_target T" after the detection); left unset where the program printed none.
+void read_child_report(const std::string& path, SimulationRecord& sim) {
+  std::ifstream in(path);
+  std::string line;
+  while (std::getline(in, line)) {
+    constexpr std::string_view kTests = "candidate_tests ", kSimd = "simd_target ";
+    if (line.rfind(kTests, 0) == 0) {
+      const std::string value = line.substr(kTests.size());
+      if (!value.empty() && value.size() <= 19 &&
+          value.find_first_not_of("0123456789") == std::string::npos) {
+        sim.candidate_tests = std::stoull(value);
+      }
+    } else if (line.rfind(kSimd, 0) == 0) {
+      sim.simd_target = line.substr(kSimd.size());
+    }
+  }
+}
+
 std::string level_flag(const CacheLevel& c) {
   return fmt::format("{},{},{}", c.size_bytes, c.associativity, c.line_bytes);
 }
@@ -428,6 +447,7 @@ CounterRecord simulate_caches(const CacheSimRequest& request) {
     r.l2_formula = "100 * (DLmr + DLmw) / (Dr + Dw) (per data access; L2 = simulated last level)";
     r.available = true;
     r.counted_runs = 1;
+    read_child_report(child_log, sim);
     r.simulation = sim;
     return finish(r);
   } catch (const InputError& e) {
@@ -447,9 +467,14 @@ CounterRecord simulate_detection_caches(const Scene& scene, double diameter, con
     r.source = "simulated:" + geometry.name;
     r.region = kRegion;
     r.reason = std::move(reason);
-    r.simulation = SimulationRecord{
-        geometry,           "valgrind callgrind --cache-sim=yes", threads, 0.0, request.executable,
-        cachesim_code_isa()};
+    r.simulation = SimulationRecord{geometry,
+                                    "valgrind callgrind --cache-sim=yes",
+                                    threads,
+                                    0.0,
+                                    request.executable,
+                                    cachesim_code_isa(),
+                                    std::nullopt,
+                                    ""};
     return r;
   };
   if (!callgrind_toggle_compiled_in()) {

@@ -175,13 +175,17 @@ template <>
 struct FieldTable<SimulationRecord> {
   using T = SimulationRecord;
   // executable and code_isa are absent from results written before the simulated program was
-  // built without AVX-512.
-  static constexpr auto kFields = std::tuple{field("geometry", &T::geometry),
-                                             field("simulator", &T::simulator),
-                                             field("threads", &T::threads),
-                                             field("wall_s", &T::wall_s),
-                                             field("executable", &T::executable).may_be_absent(),
-                                             field("code_isa", &T::code_isa).may_be_absent()};
+  // built without AVX-512; candidate_tests and simd_target from results written before the
+  // simulated program reported them.
+  static constexpr auto kFields =
+      std::tuple{field("geometry", &T::geometry),
+                 field("simulator", &T::simulator),
+                 field("threads", &T::threads),
+                 field("wall_s", &T::wall_s),
+                 field("executable", &T::executable).may_be_absent(),
+                 field("code_isa", &T::code_isa).may_be_absent(),
+                 field("candidate_tests", &T::candidate_tests).may_be_absent(),
+                 field("simd_target", &T::simd_target).may_be_absent()};
 };
 
 template <>

@@ -46,6 +46,12 @@ struct SimulationRecord {
   // binary's (valgrind cannot execute AVX-512), so the instruction mix can differ from it.
   std::string executable;
   std::string code_isa;
+  // What the simulated detection did, as the simulated program reports it: its candidate pair
+  // tests (the divisor of misses per test; the native run's work can differ, e.g. tiles that
+  // only the SIMD path makes) and its SIMD target ("off": the scalar loop). Null and empty
+  // when the program did not report them (another program, a failed run, older files).
+  std::optional<std::uint64_t> candidate_tests;
+  std::string simd_target;
 };
 
 struct CounterRecord {
