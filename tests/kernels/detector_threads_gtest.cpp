@@ -26,30 +26,21 @@ struct Case {
 const std::vector<Case>& cases() {
   static const std::vector<Case> all = [] {
     std::vector<Case> made;
-    auto add = [&](std::string name, SceneSpec spec) {
+    auto add = [&](std::string name, SceneKind kind, std::uint64_t n, double diameter,
+                   std::uint64_t seed) {
+      SceneSpec spec;
+      spec.kind = kind;
+      spec.n = n;
+      spec.diameter = diameter;
+      spec.seed = seed;
+      spec.size_ratio = 4.0;  // polydisperse only
       Scene scene = generate_scene(spec);
-      ContactList expected = brute_force_contacts(scene, spec.diameter);
-      made.push_back({std::move(name), std::move(scene), spec.diameter, std::move(expected)});
+      ContactList expected = brute_force_contacts(scene, diameter);
+      made.push_back({std::move(name), std::move(scene), diameter, std::move(expected)});
     };
-    SceneSpec clustered;
-    clustered.kind = SceneKind::kClustered;
-    clustered.n = 4000;
-    clustered.diameter = 0.025;
-    clustered.seed = 7;
-    add("clustered", clustered);
-    SceneSpec core;
-    core.kind = SceneKind::kCore;
-    core.n = 3000;
-    core.diameter = 0.02;
-    core.seed = 8;
-    add("core", core);
-    SceneSpec poly;
-    poly.kind = SceneKind::kPolydisperse;
-    poly.n = 2500;
-    poly.diameter = 0.08;
-    poly.size_ratio = 4.0;
-    poly.seed = 9;
-    add("polydisperse", poly);
+    add("clustered", SceneKind::kClustered, 4000, 0.025, 7);
+    add("core", SceneKind::kCore, 3000, 0.02, 8);
+    add("polydisperse", SceneKind::kPolydisperse, 2500, 0.08, 9);
     return made;
   }();
   return all;
