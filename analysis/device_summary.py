@@ -2,13 +2,16 @@
 """The detection measured on a machine of many cores (scripts/device-16core), as one page.
 
   analysis/device_summary.py RESULTS_DIR [--out RESULTS_DIR/summary.md]
+                             [--emulation OTHER_MACHINE/emulation-threads.json ...]
 
 Reads, where present: detection-16-sorted.json and detection-16-paper.json (sweeps at 1-16
 threads), chunk-study-16.json, large-scenes/*.json (detect at 1 and 16 threads on larger scenes)
 and at-<commit>/paper-tables-16.json (an earlier commit's sweep, for the change). Writes speed-up
 tables (median T_ALL over all samples; the phases T_s, the slowest thread's loop and the assembly
 after it), the chunk study's best per stencil and schedule kind, and the larger scenes' time and
-memory per particle. Every number is measured; nothing here is emulated.
+memory per particle. Every number is measured, except in the table of each --emulation file:
+the speed-ups another machine emulated for these thread counts (emulate threads), beside the
+ones measured here at the same variant, with the emulation's error.
 """
 import argparse
 import glob
@@ -116,10 +119,35 @@ def large_lines(folder):
     return lines
 
 
+def emulation_lines(path, measured, folder):
+    with open(path) as f:
+        doc = json.load(f)
+    commit = (doc["context"].get("build", {}).get("git_commit") or "?")[:7]
+    lines = [f"### Emulated elsewhere against measured here: `{os.path.relpath(path, folder)}` "
+             f"(emulated at {commit})", "",
+             "| variant | threads | measured speed-up | emulated speed-up | emulation's error |",
+             "|---|---|---|---|---|"]
+    for v in doc["variants"]:
+        name = v["variant"]
+        one = measured.get((name, 1))
+        if not one:
+            continue
+        for point in v["emulated"]:
+            t = point["threads"]
+            here = measured.get((name, t))
+            if t == 1 or not here:
+                continue
+            speedup = one["total"] / here["total"]
+            lines.append(f"| `{name}` | {t} | {speedup:.2f} | *{point['speedup']:.2f}*† | "
+                         f"{100 * (point['speedup'] / speedup - 1):+.0f} % |")
+    return lines + ["", "† emulated (docs/emulation.md), not measured."]
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("folder")
     parser.add_argument("--out")
+    parser.add_argument("--emulation", action="append", default=[])
     args = parser.parse_args()
     out = args.out or os.path.join(args.folder, "summary.md")
     lines = [f"# Detection on {os.path.basename(os.path.normpath(args.folder))}: measured", "",
@@ -138,7 +166,12 @@ def main():
             lines.append(f"Build: {build.get('flags', '?')} (native: {build.get('native')}); "
                          f"SIMD target: {context.get('simd_target', '?')}.")
             lines.append("")
-    for old in sorted(glob.glob(os.path.join(args.folder, "at-*", "paper-tables-16.json"))):
+    olds = sorted(glob.glob(os.path.join(args.folder, "at-*", "paper-tables-16.json")))
+    for emulation in args.emulation:
+        # Beside the measurement of the code the emulation ran: the earliest sweep here.
+        _, points = runs_of(olds[0]) if olds else ({}, {})
+        lines += emulation_lines(emulation, points, args.folder) + [""]
+    for old in olds:
         _, points = runs_of(old)
         lines += speedup_table(points, f"The same at {old.split(os.sep)[-2][3:]}: "
                                        f"`{os.path.relpath(old, args.folder)}`") + [""]

@@ -1,0 +1,21 @@
+#!/bin/sh
+# analysis/device_summary.py over the committed 16-core folder: its speed-up table holds the
+# measured Table 7 speed-up at 16 threads, the emulation table marks emulated values and gives
+# their error (the unsorted particle loop's +76 %), and a folder without result files is one
+# line and a non-zero exit.
+set -eu
+out=$1
+rm -rf "$out" && mkdir -p "$out"
+folder=results/intel-r-xeon-r-processor-16c
+/usr/bin/python3 analysis/device_summary.py "$folder" --out "$out/summary.md" \
+  --emulation results/amd-epyc-2c/emulation-threads.json > /dev/null
+grep -q '| `particle/sorted/full/static,200` | 0.2868 (1.00) |.*| 0.0270 (10.61) |' "$out/summary.md"
+grep -q '| `particle/unsorted/full/static` | 16 | 8.63 | \*15.18\*† | +76 % |' "$out/summary.md"
+grep -q '| 16,384,000 | `particle/sorted/full/static,200` | 16 |' "$out/summary.md"
+mkdir -p "$out/empty"
+if /usr/bin/python3 analysis/device_summary.py "$out/empty" 2> "$out/err.txt"; then
+  echo "an empty folder was summarised" >&2
+  exit 1
+fi
+[ "$(wc -l < "$out/err.txt")" -eq 1 ] && grep -q "no result file" "$out/err.txt"
+echo ok
