@@ -26,7 +26,7 @@ std::pair<Variant, double> best_schedule(MeasuredKernel& kernel, const Variant& 
   const std::array kinds{ScheduleKind::kStatic, ScheduleKind::kDynamic, ScheduleKind::kGuided};
   std::vector<std::vector<int>> chunks;
   std::vector<double> seconds;
-  const std::vector<int> balanced = balanced_chunk_grid(grid, work.tests.size(), threads);
+  const std::vector<int> balanced = chunk_grid_of(kernel, grid, work.tests.size(), threads);
   for (const auto kind : kinds) {
     std::vector<int> candidates = balanced;
     if (kind == ScheduleKind::kStatic) candidates.insert(candidates.begin(), 0);  // block

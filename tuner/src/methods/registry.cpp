@@ -1,6 +1,7 @@
 // The one place where tuning methods are registered, in the order tune() runs them (each may
 // stand on those before it). The classic chunk formulas (chunk_formulas.hpp) are priced on the
 // structure the last method tuned and verified beside them, under "classic:<formula>".
+#include "contactlab/tuner_model/schedule_model.hpp"
 #include "methods.hpp"
 
 namespace contactlab::tuner {
@@ -28,6 +29,13 @@ std::vector<Variant> structures_of(const TuneOptions& options) {
                                 {Schedule{}},
                                 options.precisions,
                                 options.grids});
+}
+
+std::vector<int> chunk_grid_of(MeasuredKernel& kernel, std::span<const int> grid,
+                               std::size_t iterations, int threads) {
+  double largest = static_cast<double>(iterations);
+  kernel.max_over_parts(std::span<double>(&largest, 1));
+  return balanced_chunk_grid(grid, static_cast<std::size_t>(largest), threads);
 }
 
 }  // namespace contactlab::tuner

@@ -56,7 +56,8 @@ class SearchMethod final : public TuningMethod {
                             options.search_samples);
     };
     ChunkSearchOptions& search_options = state.search_options;
-    search_options.grid = balanced_chunk_grid(options.chunk_grid, tuned.work.tests.size(), threads);
+    search_options.grid =
+        chunk_grid_of(kernel, options.chunk_grid, tuned.work.tests.size(), threads);
     const int model_chunk = tuned.model_choice.schedule.chunk;
     search_options.seed_chunk = model_chunk > 0 ? model_chunk : search_options.grid.back();
     // Budget: a fifth of what the exhaustive sweep would spend, in measured runs. What the
