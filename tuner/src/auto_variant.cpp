@@ -3,6 +3,7 @@
 
 #include <fmt/core.h>
 
+#include "contactlab/tuner/progress.hpp"
 #include "methods/methods.hpp"
 
 namespace contactlab::tuner {
@@ -19,11 +20,17 @@ Calibration machine_calibration(TuningCache& cache, const TuneOptions& options, 
     covered = covered && cached->structures.count(structure_key(structure)) > 0;
   }
   if (!recalibrate && covered) return *cached;
+  Calibration calibration;
   if (progress) {
     progress(fmt::format("calibrating the cost model on this machine (once; cached in {})...",
                          cache.path()));
+    // The bar on stderr, as the lines: a redrawn line on a terminal, else a line a quarter.
+    ProgressBar bar("calibrating");
+    calibration = calibrate_machine(options, threads, bar.meter());
+    bar.finish(calibration.seconds);
+  } else {
+    calibration = calibrate_machine(options, threads);
   }
-  Calibration calibration = calibrate_machine(options, threads);
   if (cached && !recalibrate) {  // keep the structures fitted before and not asked for now
     for (const auto& [key, costs] : cached->structures) calibration.structures.emplace(key, costs);
   }

@@ -1,6 +1,7 @@
 // Calibration of the schedule model's machine costs: a small fixed set of timed runs of every
 // structure on this machine, fitted per structure (cost_calibration.hpp), once per machine and
-// build (the tuning cache keeps it).
+// build (the tuning cache keeps it). What it times and why that is enough: docs/tuning.md,
+// "Calibration".
 #include <fmt/core.h>
 #include <omp.h>
 
@@ -20,42 +21,77 @@
 namespace contactlab::tuner {
 namespace {
 
-// Timed runs per calibration point; their median is fitted (a single run on a shared VM can
-// take twice as long when a vCPU is stolen).
-constexpr int kCalibrationSamples = 5;
+// Timed runs per calibration point: kMinSamples, more (up to kMaxSamples) while no other sample
+// lies within kAgreement of their median. The median is fitted: a single run on a shared VM can
+// take twice as long when a vCPU is stolen, and the median of three that two samples agree on
+// ignores such a run; where they all disagree, more samples decide. A quiet machine stops
+// nearly every point at three, a busy one pays more where it needs them.
+constexpr std::size_t kMinSamples = 3;
+constexpr std::size_t kMaxSamples = 5;
+constexpr double kAgreement = 0.05;
 
 WorkView view_of(const LoopWork& work) { return {work.tests, work.homes, work.builds}; }
 
-// The loop's part of T_c in one run: what the loop constants are fitted to (the rows written
-// after it are the output term's).
-double loop_seconds(DetectionKernel& kernel, const Variant& variant, int threads) {
-  const KernelRun r = kernel.run(variant, threads);
-  return r.phase_s("detect") - r.phase_s("assembly");
+bool settled(const std::vector<double>& samples) {
+  if (samples.size() < kMinSamples) return false;
+  if (samples.size() >= kMaxSamples) return true;
+  // The median and the samples within kAgreement of it (the median's own sample among them
+  // where the count is odd): two such settle the point.
+  const double m = median(samples);
+  std::size_t agreeing = 0;
+  for (const double x : samples) agreeing += std::abs(x - m) <= kAgreement * m;
+  return agreeing >= 2;
 }
 
-// The output's entry-weighted degree (as the model estimates it) and the assembly's seconds
-// per copied entry per thread (assembly x threads / copied entries: each thread writes the
-// rows of its own finds) of one structure on one scene, the median of kCalibrationSamples
-// static runs after a warm-up. Where none is copied (the full stencil at one thread writes its
-// rows in place, and the model prices no output for it) the assembly's rest, its row offsets,
-// is stored per entry: a floor for predictions at more threads from this point alone.
-std::pair<double, double> assembly_per_entry(DetectionKernel& kernel, const Variant& structure,
-                                             int threads) {
-  Variant v = structure;
-  v.schedule = Schedule{};
-  kernel.run(v, threads);
-  std::vector<double> per_entry;
-  std::uint64_t entries = 0;
-  const double share = kernel.copied_output_share(v, threads);
-  for (int k = 0; k < kCalibrationSamples; ++k) {
-    const KernelRun r = kernel.run(v, threads);
-    for (const auto& [name, count] : r.counts) {
-      if (name == "contact_pairs") entries = 2 * count;
-    }
-    const double copied = static_cast<double>(entries) * (share > 0.0 ? share : 1.0);
-    per_entry.push_back(entries == 0 ? 0.0 : r.phase_s("assembly") * threads / copied);
+struct CalibrationScene {
+  SceneSpec spec;
+  const std::vector<Schedule>& schedules;
+};
+
+// One point: a structure on a scene under a schedule at a thread count, its samples of the
+// loop's time (T_c less the assembly after it: what the loop constants are fitted to) and, for
+// the output term, of the assembly.
+struct Point {
+  std::size_t structure = 0, scene = 0;
+  int threads = 1;
+  Schedule schedule;
+  std::vector<double> loop_s, assembly_s;
+  std::uint64_t entries = 0;  // the output's, two per contact pair
+  double last_run_s = -1.0;   // the last run's wall time (the time-left estimate), -1 before one
+};
+
+// The estimate of the time left: every run still planned priced at its point's last run, else at
+// its structure's warm-up on the scene, else at `prior_s` (the work priced by the default machine
+// costs) times what the runs so far took against their priors.
+class TimeLeft {
+ public:
+  void ran(double prior_s, double seconds) {
+    prior_done_s_ += prior_s;
+    done_s_ += seconds;
   }
-  return {kernel.estimated_output().degree, median(per_entry)};
+  double scaled(double prior_s) const {
+    return prior_done_s_ > 0.0 ? prior_s * done_s_ / prior_done_s_ : prior_s;
+  }
+
+ private:
+  double prior_done_s_ = 0.0, done_s_ = 0.0;
+};
+
+// What a run of `work` at `threads` should take with MachineCosts' defaults, with the setup (one
+// registration and reordering per run) and the rows' writing at about 30 ns a particle: only the
+// proportions between points matter (TimeLeft scales them).
+double prior_seconds(const LoopWork& work, std::size_t particles, int threads) {
+  const MachineCosts c;
+  double tests = 0.0, homes = 0.0, builds = 0.0;
+  for (const auto t : work.tests) tests += t;
+  for (const auto h : work.homes) homes += h;
+  for (const auto b : work.builds) builds += b;
+  if (work.homes.empty()) homes = static_cast<double>(work.tests.size());
+  if (work.builds.empty()) builds = static_cast<double>(work.tests.size());
+  const double loop = tests * c.seconds_per_test +
+                      static_cast<double>(work.tests.size()) * c.seconds_per_iteration +
+                      homes * c.seconds_per_home + builds * c.seconds_per_build;
+  return loop / threads + 3e-8 * static_cast<double>(particles);
 }
 
 }  // namespace
@@ -71,123 +107,215 @@ std::string structure_key(const Variant& variant) {
                                        : std::string());
 }
 
-Calibration calibrate_machine(const TuneOptions& options, int threads) {
+Calibration calibrate_machine(const TuneOptions& options, int threads,
+                              const ProgressMeter& progress) {
   const double start = omp_get_wtime();
-  // Two sizes of one dense clustered scene, timed under schedules that exercise every cost
-  // term, separate time per pair test from the fixed costs. A sparse uniform scene (about 0.1
-  // particles per cell, few tests per particle) identifies the costs of homes and of
-  // neighbour-range builds in a grid larger than the caches, which dominate sparse scenes and
-  // which dense scenes alone leave free; block, block-cyclic and dynamic suffice there. Each
-  // is small enough to calibrate in seconds.
+  // A dense clustered scene timed under schedules that exercise every cost term; a larger one
+  // (block only) for the output's cost at a high degree; two dense uniform scenes (the same homes
+  // with twice the tests) that tell the per-test constant from the fixed ones; a sparse uniform
+  // scene and a nearly empty grid for the costs of homes, of neighbour-range builds and of empty
+  // cells. docs/tuning.md ("Calibration") says why each is there and what was left out.
   const std::vector<Schedule> every_term{{ScheduleKind::kStatic, 0},  {ScheduleKind::kStatic, 1},
                                          {ScheduleKind::kStatic, 64}, {ScheduleKind::kStatic, 4096},
                                          {ScheduleKind::kDynamic, 1}, {ScheduleKind::kDynamic, 64},
                                          {ScheduleKind::kGuided, 64}};
   const std::vector<Schedule> sparse_terms{
       {ScheduleKind::kStatic, 0}, {ScheduleKind::kStatic, 64}, {ScheduleKind::kDynamic, 64}};
-  struct CalibrationScene {
-    Scene scene;
-    double diameter;
-    const std::vector<Schedule>& schedules;
-  };
-  std::vector<CalibrationScene> scenes;
-  auto add_scene = [&](SceneKind kind, std::uint64_t n, double diameter,
-                       const std::vector<Schedule>& schedules) {
+  const std::vector<Schedule> dense_terms{{ScheduleKind::kStatic, 0}, {ScheduleKind::kDynamic, 64}};
+  const std::vector<Schedule> block{{ScheduleKind::kStatic, 0}};
+  auto spec_of = [](SceneKind kind, std::uint64_t n, double diameter) {
     SceneSpec spec;
     spec.kind = kind;
     spec.n = n;
     spec.diameter = diameter;
-    scenes.push_back({generate_scene(spec), diameter, schedules});
+    return spec;
   };
-  add_scene(SceneKind::kClustered, 40'000, 1.0 / 100.0, every_term);
-  add_scene(SceneKind::kClustered, 120'000, 1.0 / 100.0, every_term);
-  add_scene(SceneKind::kUniform, 300'000, 1.0 / 150.0, sparse_terms);
-  // The grid alone: 2,000 particles in 200^3 cells, where the cell loop's time is its empty
-  // iterations (about 1 ns a key on the EPYC VM, at 100^3 to 200^3 cells alike). In the scenes
-  // above they are a fifth of the time or less, and the fit traded them for homes and builds
-  // (0.36 ns a key): the cell loop's full stencil came out 13 % faster than measured on the
-  // 1,024,000-particle scenes (7.9 M keys), and on the off-centre blob the model chose it over
-  // the particle loop, which ran 12 % faster.
-  add_scene(SceneKind::kUniform, 2'000, 1.0 / 200.0, sparse_terms);
-  // The output term (output_cost.hpp): the assembly per entry at a high entry-weighted degree
-  // (the 120,000-particle clustered scene above: the paper's law at the paper's N D^3, up to 350
-  // particles per cell) and at a low one: 250,000 uniform particles with about 120 contacts
-  // each (D^3 N = 30), 30 M entries, at most 53 particles per cell. Its loop is fitted too:
-  // about 800 tests a home, where the tests are nearly all of the time. Without it the per-test
-  // constant traded places with the per-home and per-build ones from one calibration to the
-  // next (cell/morton/full: 0.04 to 0.37 ns a test), and a dense scene's prediction with it (the
-  // off-centre blob's chosen variant ran 2.4x its prediction, 15.6 % slower than the best).
+  const std::vector<CalibrationScene> scenes{
+      // Dense cells beside sparse ones, every schedule: chunks, grabs, breaks and cold tests.
+      {spec_of(SceneKind::kClustered, 40'000, 1.0 / 100.0), every_term},
+      // The same law at three times N (the paper's N D^3, up to 350 particles a cell): the
+      // output term's high-degree point (output_cost.hpp: entry-weighted degree about 240),
+      // and a second size of the first scene for the loop.
+      {spec_of(SceneKind::kClustered, 120'000, 1.0 / 100.0), block},
+      // Sparse (0.09 particles a cell) in a cell index larger than the caches (13 MB): homes
+      // and range builds, which dominate sparse scenes.
+      {spec_of(SceneKind::kUniform, 300'000, 1.0 / 150.0), sparse_terms},
+      // The grid alone: 2,000 particles in 200^3 cells, where the cell loop's time is its empty
+      // iterations (about 1 ns a key on the EPYC VM), which the other scenes leave the fit to
+      // trade for homes and builds.
+      {spec_of(SceneKind::kUniform, 2'000, 1.0 / 200.0), sparse_terms},
+      // 80,000 uniform particles at D^3 N = 60 and at 30 (about 250 and 125 contacts each, 1,600
+      // and 800 tests a home): the same homes with twice the tests. The second is the output
+      // term's low-degree point (degree about 120, 10 M entries, 40 MB of rows: past the caches).
+      {spec_of(SceneKind::kUniform, 80'000, std::cbrt(60.0 / 80'000.0)), dense_terms},
+      {spec_of(SceneKind::kUniform, 80'000, std::cbrt(30.0 / 80'000.0)), dense_terms},
+  };
   constexpr std::size_t kHighDegreeScene = 1;
-  // The same particles at 1.26 D (D^3 N = 60): the same homes with twice the tests, so that the
-  // per-test constant is told from the per-home one by the difference of the two, whatever else
-  // the fit does (with one such scene cell/morton/full still came out at 0.006 ns a test and
-  // 190 ns a home in one calibration of three).
-  add_scene(SceneKind::kUniform, 250'000, std::cbrt(60.0 / 250'000.0), sparse_terms);
-  add_scene(SceneKind::kUniform, 250'000, std::cbrt(30.0 / 250'000.0), sparse_terms);
-  const std::size_t low_degree_scene = scenes.size() - 1;
-  std::deque<DetectionKernel> kernels;  // one per scene, each with its own buffers
-  for (const CalibrationScene& c : scenes) kernels.emplace_back(c.scene, c.diameter);
-  Calibration calibration;
-  calibration.source = "calibrated now";
-  calibration.threads = threads;
+  constexpr std::size_t kLowDegreeScene = 5;
+  const std::vector<Variant> structures = structures_of(options);
   std::vector<int> thread_counts{1};
   if (threads > 1) thread_counts.push_back(threads);
+
+  // Every scene and every structure's work (no timing), before the first timed run: the time
+  // left is then known from the first runs on.
+  std::deque<Scene> scene_data;
+  std::deque<DetectionKernel> kernels;  // one per scene, each with its own buffers
+  std::vector<std::vector<LoopWork>> works(scenes.size());  // kept alive: TimedRun views
+  std::vector<double> degrees(scenes.size(), 0.0);
+  for (std::size_t s = 0; s < scenes.size(); ++s) {
+    scene_data.push_back(generate_scene(scenes[s].spec));
+    kernels.emplace_back(scene_data.back(), scenes[s].spec.diameter);
+    for (const Variant& structure : structures)
+      works[s].push_back(kernels[s].iteration_work(structure, 1));
+    if (s == kHighDegreeScene || s == kLowDegreeScene)
+      degrees[s] = kernels[s].estimated_output().degree;
+  }
+
   // Every point (structure, schedule, thread count) of a scene is timed once per round, the
   // rounds in a new seeded order each, scene after scene: a noisy spell of the machine then
   // falls on all structures alike. Timed one structure after another, a spell had made one
   // structure's constants 10 - 20 % off against another's, and the model chose between them
   // wrongly (docs/tuning.md).
-  const std::vector<Variant> structures = structures_of(options);
-  struct Point {
-    std::size_t structure, scene;
-    int threads;
-    Schedule schedule;
-    std::vector<double> loop_s;
-  };
   std::vector<Point> points;
-  std::vector<std::vector<LoopWork>> works(structures.size());  // kept alive: TimedRun views
-  for (std::size_t st = 0; st < structures.size(); ++st) {
-    for (std::size_t s = 0; s < scenes.size(); ++s) {
-      works[st].push_back(kernels[s].iteration_work(structures[st], 1));
+  for (std::size_t s = 0; s < scenes.size(); ++s) {
+    for (std::size_t st = 0; st < structures.size(); ++st) {
       for (const int t : thread_counts) {
-        for (const Schedule& schedule : scenes[s].schedules)
-          points.push_back({st, s, t, schedule, {}});
+        for (const Schedule& schedule : scenes[s].schedules) {
+          Point p;
+          p.structure = st;
+          p.scene = s;
+          p.threads = t;
+          p.schedule = schedule;
+          points.push_back(std::move(p));
+        }
       }
     }
   }
-  auto variant_of = [&](const Point& p) {
-    Variant v = structures[p.structure];
-    v.schedule = p.schedule;
+  auto variant_of = [&](std::size_t structure, const Schedule& schedule) {
+    Variant v = structures[structure];
+    v.schedule = schedule;
     return v;
   };
+  auto warm_index = [&](std::size_t structure, int t) {
+    return structure * thread_counts.size() + (t == 1 ? 0 : 1);
+  };
+  // Per scene, per structure and thread count: the run's prior and the warm-up's wall time (-1
+  // before it ran).
+  std::vector<std::vector<double>> prior_s(scenes.size()), warm_s(scenes.size());
+  for (std::size_t s = 0; s < scenes.size(); ++s) {
+    for (std::size_t st = 0; st < structures.size(); ++st) {
+      for (const int t : thread_counts) {
+        prior_s[s].push_back(prior_seconds(works[s][st], scene_data[s].size(), t));
+        warm_s[s].push_back(-1.0);
+      }
+    }
+  }
+  auto prior_of = [&](std::size_t scene, std::size_t structure, int t) {
+    return prior_s[scene][warm_index(structure, t)];
+  };
+  TimeLeft time_left;
+  auto report = [&] {
+    if (!progress) return;
+    double left = 0.0;
+    for (std::size_t s = 0; s < scenes.size(); ++s) {
+      for (std::size_t st = 0; st < structures.size(); ++st) {
+        for (const int t : thread_counts) {
+          if (warm_s[s][warm_index(st, t)] < 0.0) left += time_left.scaled(prior_of(s, st, t));
+        }
+      }
+    }
+    for (const Point& p : points) {
+      const std::size_t planned =
+          std::max(kMinSamples, p.loop_s.size() + (settled(p.loop_s) ? 0 : 1));
+      const double warm = warm_s[p.scene][warm_index(p.structure, p.threads)];
+      const double each = p.last_run_s >= 0.0 ? p.last_run_s
+                          : warm >= 0.0
+                              ? warm
+                              : time_left.scaled(prior_of(p.scene, p.structure, p.threads));
+      left += each * static_cast<double>(planned - p.loop_s.size());
+    }
+    const double elapsed = omp_get_wtime() - start;
+    progress(std::min(0.99, elapsed / (elapsed + left)), left);
+  };
+  auto timed_run = [&](DetectionKernel& kernel, const Variant& variant, int t, double prior,
+                       double& wall_s) {
+    const double before = omp_get_wtime();
+    KernelRun run = kernel.run(variant, t);
+    wall_s = omp_get_wtime() - before;
+    time_left.ran(prior, wall_s);
+    return run;
+  };
+
   std::mt19937_64 random(20261203);
   for (std::size_t s = 0; s < scenes.size(); ++s) {
+    // One warm-up per structure and thread count (its buffers faulted in, its data in the
+    // caches), not per point: the median of a point's samples absorbs a first run that is slow.
+    for (std::size_t st = 0; st < structures.size(); ++st) {
+      for (const int t : thread_counts) {
+        timed_run(kernels[s], variant_of(st, Schedule{}), t, prior_of(s, st, t),
+                  warm_s[s][warm_index(st, t)]);
+        report();
+      }
+    }
     std::vector<Point*> order;
     for (Point& p : points) {
       if (p.scene == s) order.push_back(&p);
     }
-    for (Point* p : order) kernels[s].run(variant_of(*p), p->threads);  // warm-up
-    for (int round = 0; round < kCalibrationSamples; ++round) {
-      std::shuffle(order.begin(), order.end(), random);
-      for (Point* p : order)
-        p->loop_s.push_back(loop_seconds(kernels[s], variant_of(*p), p->threads));
+    for (std::size_t round = 0; round < kMaxSamples; ++round) {
+      std::vector<Point*> due;
+      for (Point* p : order) {
+        if (!settled(p->loop_s)) due.push_back(p);
+      }
+      if (due.empty()) break;
+      std::shuffle(due.begin(), due.end(), random);
+      for (Point* p : due) {
+        const KernelRun r = timed_run(kernels[s], variant_of(p->structure, p->schedule), p->threads,
+                                      prior_of(s, p->structure, p->threads), p->last_run_s);
+        p->loop_s.push_back(r.phase_s("detect") - r.phase_s("assembly"));
+        p->assembly_s.push_back(r.phase_s("assembly"));
+        for (const auto& [name, count] : r.counts) {
+          if (name == "contact_pairs") p->entries = 2 * count;
+        }
+        report();
+      }
     }
   }
+
+  Calibration calibration;
+  calibration.source = "calibrated now";
+  calibration.threads = threads;
   for (std::size_t st = 0; st < structures.size(); ++st) {
     const Variant& structure = structures[st];
     std::vector<TimedRun> runs;
     for (const Point& p : points) {
       if (p.structure != st) continue;
-      runs.push_back({view_of(works[st][p.scene]), p.threads, p.schedule, median(p.loop_s)});
+      runs.push_back({view_of(works[p.scene][st]), p.threads, p.schedule, median(p.loop_s)});
     }
     const CalibrationResult fit = calibrate_costs(runs);
+    // The output term from the block runs of the low- and high-degree scenes above: the
+    // assembly's seconds per copied entry per thread (assembly x threads / copied entries: each
+    // thread writes the rows of its own finds). Where none is copied (the full stencil at one
+    // thread writes its rows in place, and the model prices no output for it) the assembly's
+    // rest, its row offsets, is stored per entry: a floor for predictions at more threads from
+    // this point alone.
+    auto per_entry = [&](std::size_t scene, int t) {
+      for (const Point& p : points) {
+        if (p.structure != st || p.scene != scene || p.threads != t || p.schedule != Schedule{}) {
+          continue;
+        }
+        const double share = contactlab::copied_output_share(variant_of(st, Schedule{}), t);
+        const double copied = static_cast<double>(p.entries) * (share > 0.0 ? share : 1.0);
+        std::vector<double> seconds;
+        for (const double a : p.assembly_s)
+          seconds.push_back(p.entries == 0 ? 0.0 : a * t / copied);
+        return median(seconds);
+      }
+      return 0.0;
+    };
     std::vector<OutputCost> output;
     for (const int t : thread_counts) {
-      const auto [low_degree, low_per_entry] =
-          assembly_per_entry(kernels[low_degree_scene], structure, t);
-      const auto [high_degree, high_per_entry] =
-          assembly_per_entry(kernels[kHighDegreeScene], structure, t);
-      output.push_back({t, low_degree, low_per_entry, high_degree, high_per_entry});
+      output.push_back({t, degrees[kLowDegreeScene], per_entry(kLowDegreeScene, t),
+                        degrees[kHighDegreeScene], per_entry(kHighDegreeScene, t)});
     }
     calibration.structures[structure_key(structure)] = {
         fit.costs, fit.rms_relative_error, static_cast<int>(runs.size()), std::move(output)};

@@ -16,6 +16,7 @@
 
 #include "contactlab/kernels/scene.hpp"
 #include "contactlab/kernels/variant.hpp"
+#include "contactlab/tuner/progress.hpp"
 #include "contactlab/tuner/result_schema.hpp"
 #include "contactlab/tuner/tune_report.hpp"
 #include "contactlab/tuner_model/output_cost.hpp"
@@ -74,13 +75,17 @@ struct Calibration {
 // "loop/order/stencil[/float]": a variant without its schedule.
 std::string structure_key(const Variant& variant);
 
-// Times a small fixed set of runs of every structure of `options` on this machine (clustered
-// scenes of N = 40,000 and 120,000, D = 1/100, sparse and dense uniform ones and a nearly empty
-// grid; static, static,k, dynamic,k, guided,k at 1 and `threads` threads; every point of a scene
-// once per round, in a new seeded order each round) and fits each structure's loop costs to the
-// loop's time; its output costs (output_cost.hpp) from the assembly's time per entry on the
-// 120,000-particle scene and on a dense uniform one whose rows exceed the caches (docs/tuning.md).
-Calibration calibrate_machine(const TuneOptions& options, int threads);
+// Times a small fixed set of runs of every structure of `options` on this machine (a clustered
+// scene of N = 120,000 at D = 1/100, two dense uniform ones of N = 80,000, a sparse uniform one
+// and a nearly empty grid; static, static,k, dynamic,k, guided,k at 1 and `threads` threads;
+// every point of a scene once per round, in a new seeded order each round, three rounds and up to
+// five for points whose samples spread) and fits each structure's loop costs to the loop's time;
+// its output costs (output_cost.hpp) from the assembly's time per entry in the block runs of the
+// clustered scene and of the sparser dense uniform one, whose rows exceed the caches
+// (docs/tuning.md). `progress`, when given, hears the share done and the seconds left after
+// every timed run.
+Calibration calibrate_machine(const TuneOptions& options, int threads,
+                              const ProgressMeter& progress = {});
 
 struct TuneReport {
   TuneDocument document;  // the tune.json document (docs/tuning.md)
