@@ -207,6 +207,7 @@ int DemProfileCommand::run() const {
         {"config", config.name},
         {"particles", particles.size()},
         {"variant", dem::to_string(variant)},
+        {"step_isa", dem::to_string(dem::step_isa())},
         {"steps", steps},
         {"rounds", rounds_},
         {"phase_split",

@@ -117,6 +117,8 @@ void run_steps(benchmark::State& state, bool fused) {
   state.counters["contacts_per_particle"] = static_cast<double>(touching) / n;
   state.counters["pairs_per_particle"] = static_cast<double>(engine->pairs().size()) / n;
   state.counters["max_span"] = static_cast<double>(engine->pairs().max_span);
+  // The instruction set the step ran on (CONTACTLAB_SIMD chooses another, as for detection).
+  state.SetLabel("step on " + to_string(engine->instruction_set()));
 }
 
 void BM_DemStep(benchmark::State& state) { run_steps(state, false); }

@@ -6,16 +6,29 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 
 #include "contactlab/kernels/error.hpp"
-#include "force_pass.hpp"
-#include "particle_update.hpp"
-#include "wall_law.hpp"
+#include "pair_block.hpp"
 
 namespace contactlab::dem {
 using detail::kKinStride;
+
+// engine_isa.cpp defines them, once per instruction set.
+template <>
+void Engine::compute_forces_on<StepIsa::kBaseline>(bool final_kick, bool drift_next);
+template <>
+void Engine::compute_forces_on<StepIsa::kAvx2>(bool final_kick, bool drift_next);
+template <>
+void Engine::compute_forces_on<StepIsa::kAvx512>(bool final_kick, bool drift_next);
+template <>
+void Engine::drift_on<StepIsa::kBaseline>(double& max_disp_sq, std::uint32_t& bad);
+template <>
+void Engine::drift_on<StepIsa::kAvx2>(double& max_disp_sq, std::uint32_t& bad);
+template <>
+void Engine::drift_on<StepIsa::kAvx512>(double& max_disp_sq, std::uint32_t& bad);
 
 Engine::Engine(EngineSettings settings, Particles particles)
     : settings_(std::move(settings)),
@@ -194,15 +207,6 @@ void Engine::fail(const std::string& what, std::uint32_t index) const {
                   what, step_, time_s_, p.id[index], p.x[index], p.y[index], p.z[index]));
 }
 
-namespace {
-
-// The drift's constants: dt, dt/2, the prediction kick, (skin/2)^2.
-detail::DriftTerms drift_terms(const EngineSettings& s, double kick) {
-  return {s.dt_s, 0.5 * s.dt_s, kick, 0.25 * s.skin * s.skin};
-}
-
-}  // namespace
-
 void Engine::step() { advance(false); }
 
 std::uint64_t Engine::run_steps(std::uint64_t steps, BatchEnd end) {
@@ -221,7 +225,7 @@ bool Engine::advance(bool drift_next, bool end_at_rebuild) {
   Particles& p = particles_;
   const std::size_t n = p.size();
   const double dt = settings_.dt_s;
-  const detail::DriftTerms terms = drift_terms(settings_, prediction_kick());
+  const double move_limit_sq = 0.25 * settings_.skin * settings_.skin;  // (skin/2)^2
   double t0 = omp_get_wtime();
   double max_disp_sq = 0.0;
   std::uint32_t bad = UINT32_MAX;  // the first particle that moved too far or is not finite
@@ -231,16 +235,10 @@ bool Engine::advance(bool drift_next, bool end_at_rebuild) {
     max_disp_sq = drifted_disp_sq_;
     bad = drifted_bad_;
   } else {
-    // Each thread drifts the particles whose rows it takes in the force pass (n t / T ..).
-#pragma omp parallel num_threads(settings_.threads) reduction(max                          \
-                                                              : max_disp_sq) reduction(min \
-                                                                                       : bad)
-    {
-      const auto t = static_cast<std::size_t>(omp_get_thread_num());
-      const auto threads = static_cast<std::size_t>(omp_get_num_threads());
-      detail::drift_particles(p, kin_.data(), terms, n * t / threads, n * (t + 1) / threads,
-                              max_disp_sq, bad);
-    }
+    static constexpr std::array kDrifts{&Engine::drift_on<StepIsa::kBaseline>,
+                                        &Engine::drift_on<StepIsa::kAvx2>,
+                                        &Engine::drift_on<StepIsa::kAvx512>};
+    (this->*kDrifts[static_cast<std::size_t>(step_isa_)])(max_disp_sq, bad);
   }
   // Time from the last (re)start's base: exact multiples of dt, also after a dt change.
   time_s_ = base_time_s_ + static_cast<double>(step_ + 1 - base_step_) * dt;
@@ -254,7 +252,7 @@ bool Engine::advance(bool drift_next, bool end_at_rebuild) {
                           : std::string("position or velocity is not finite (NaN)"),
          bad);
   }
-  const bool rebuilds = max_disp_sq > terms.move_limit_sq;
+  const bool rebuilds = max_disp_sq > move_limit_sq;
   if (rebuilds) {
     rebuild();
     phases_.neighbor_s += omp_get_wtime() - t1;
@@ -285,175 +283,14 @@ void Engine::set_force_variant(const ForceVariant& variant) {
   settings_.force_variant = variant;
 }
 
+// The step's hot loops on the instruction set the engine was made for (engine_isa.cpp).
 void Engine::compute_forces(bool final_kick, bool drift_next) {
-  Particles& p = particles_;
-  PairList& q = pairs_;
-  const PairCoefficients& c = coefficients_;
-  const std::size_t n = p.size();
-  const double dt = settings_.dt_s, half = 0.5 * dt;
-  const bool rolling = c.mu_roll > 0;
-  std::uint64_t large = 0;  // overlaps above 1 %: the threads add exactly (integers)
-  std::uint32_t bad_pair = UINT32_MAX, bad_wall_particle = UINT32_MAX;
-  const double t0 = omp_get_wtime();
-  acc_.resize(detail::kAccStride * n);
-  if (block_scratch_.size() < static_cast<std::size_t>(settings_.threads)) {
-    block_scratch_.resize(static_cast<std::size_t>(settings_.threads));
-  }
-  // A particle's finish: its pair sums (its own row, then its j sides in pair order: fixed,
-  // so bit-identical for any thread count), walls, gravity, kick.
-  double* acc = acc_.data();
-  const detail::WallLaw wall_law(settings_.walls, time_s_, c, dt);
-  // The walls of particles [first, last) into their sums (in the finish, or with walls=serial
-  // for all particles on one thread after all pairs): only those some wall may reach.
-  auto walls = [&](std::size_t first, std::size_t last, std::uint64_t& large_here,
-                   std::uint32_t& bad_wall_here) {
-    auto a = std::lower_bound(wall_reachers_.begin(), wall_reachers_.end(), first);
-    for (; a != wall_reachers_.end() && *a < last; ++a) {
-      wall_law.add(*a, wall_reach_[*a], &kin_[kKinStride * *a], p, acc + detail::kAccStride * *a,
-                   large_here, bad_wall_here);
-    }
-  };
-  // The particles [first, last)'s finish: their walls into their sums (unless added
-  // already), then the sums, gravity, drag and kick over the range (finish_particles).
-  const detail::FinishTerms terms{
-      settings_.viscous_damping,
-      {settings_.gravity[0], settings_.gravity[1], settings_.gravity[2]},
-      half,
-      final_kick};
-  // With drift_next (after every pair: update=separate), each piece of particles is drifted
-  // into the next step as soon as it is finished, while its arrays are still in L1. Not where a
-  // pair (known by now) or one of the piece's walls failed: the run stops, and its message shows
-  // the positions of this step. Per thread: the drift's largest displacement and its first failed
-  // particle.
-  const detail::DriftTerms drift = drift_terms(settings_, prediction_kick());
-  const bool drifts = drift_next && final_kick;
-  const std::size_t slots = drifts ? static_cast<std::size_t>(settings_.threads) : 0;
-  std::vector<double> drift_disp_sq(slots, 0.0);  // nothing allocated in a step that won't drift
-  std::vector<std::uint32_t> drift_bad(slots, UINT32_MAX);
-  // Thread 0's finish-and-drift loops, and the finish and the drift of its sampled pieces.
-  struct {
-    std::size_t pieces = 0;
-    double loop_s = 0.0, sampled_finish_s = 0.0, sampled_drift_s = 0.0;
-    double drift_s() const {
-      const double sampled = sampled_finish_s + sampled_drift_s;
-      return sampled > 0.0 ? loop_s * (sampled_drift_s / sampled) : 0.0;
-    }
-  } drift_clock;
-  // walls=serial: every particle's walls on one thread, inside `omp single`, whose barrier
-  // shows a failure to every thread's finish (with parallel walls a piece's own fail there).
-  bool serial_wall_failed = false;
-  auto serial_walls = [&](std::size_t first, std::size_t last, std::uint64_t& large_here,
-                          std::uint32_t& bad_wall_here) {
-    walls(first, last, large_here, bad_wall_here);
-    serial_wall_failed = bad_wall_here != UINT32_MAX;
-  };
-  auto finish = [&](std::size_t first, std::size_t last, bool with_walls, std::uint64_t& large_here,
-                    std::uint32_t& bad_wall_here) {
-    if (with_walls) walls(first, last, large_here, bad_wall_here);
-    if (!drifts || bad_pair != UINT32_MAX || bad_wall_here != UINT32_MAX || serial_wall_failed) {
-      detail::finish_particles(kin_.data(), acc, p, terms, first, last);
-      return;
-    }
-    const auto t = static_cast<std::size_t>(omp_get_thread_num());
-    const bool timer = t == 0;
-    constexpr std::size_t kPiece = 64;  // particles: what they read (about 25 KB) stays in L1
-    // Thread 0 times its whole loop, and the finish and the drift apart on every
-    // kTimedEvery-th piece; the drift's share of the loop is their ratio (timing every piece
-    // cost 1 % of the step on this VM, a clock read each). A ratio, not one piece scaled up:
-    // a stall in a sampled piece then cannot make the drift outweigh the loop it lies in.
-    constexpr std::size_t kTimedEvery = 8;
-    const double loop0 = timer ? omp_get_wtime() : 0.0;
-    for (std::size_t a = first; a < last; a += kPiece) {
-      const std::size_t z = std::min(last, a + kPiece);
-      const bool timed = timer && drift_clock.pieces++ % kTimedEvery == 0;
-      const double p0 = timed ? omp_get_wtime() : 0.0;
-      detail::finish_particles(kin_.data(), acc, p, terms, a, z);
-      const double p1 = timed ? omp_get_wtime() : 0.0;
-      detail::drift_particles(p, kin_.data(), drift, a, z, drift_disp_sq[t], drift_bad[t]);
-      if (timed) {
-        const double p2 = omp_get_wtime();
-        drift_clock.sampled_finish_s += p1 - p0;
-        drift_clock.sampled_drift_s += p2 - p1;
-      }
-    }
-    if (timer) drift_clock.loop_s += omp_get_wtime() - loop0;
-  };
-  const double* kin = kin_.data();
-  // Phase ends as thread 0 sees them (after barriers, so the same for all threads).
-  double phase_end[3] = {-1.0, -1.0, -1.0};
-  auto mark = [&](detail::Phase phase) {
-    if (omp_get_thread_num() == 0) phase_end[static_cast<int>(phase)] = omp_get_wtime();
-  };
-  // The law's switches chosen at compile time.
-  const ForceVariant& variant = settings_.force_variant;
-  const bool ordered = variant.accumulation == Accumulation::kOrdered;
-  const bool atomic = variant.accumulation == Accumulation::kAtomic;
-  const bool full = variant.accumulation == Accumulation::kFullList;
-  if (full) {  // next step's springs, written by the i sides (resized only when the list is)
-    q.hx_next.resize(q.size());
-    q.hy_next.resize(q.size());
-    q.hz_next.resize(q.size());
-  }
-  if (!ordered) {
-    const Schedule& sc = variant.schedule;
-    omp_set_schedule(sc.kind == ScheduleKind::kStatic    ? omp_sched_static
-                     : sc.kind == ScheduleKind::kDynamic ? omp_sched_dynamic
-                                                         : omp_sched_guided,
-                     sc.chunk);
-    thread_acc_.resize(static_cast<std::size_t>(settings_.threads));
-  }
-  auto passes = [&]<bool kRolling, bool kClamp>() {
-#pragma omp parallel num_threads(settings_.threads)
-    {
-      std::vector<double>& scratch = block_scratch_[omp_get_thread_num()];
-      if (ordered) {
-        detail::force_pass<kRolling, kClamp>(
-            kin, n, q, c, dt, variant.fused_update, variant.serial_walls, acc, scratch, finish,
-            serial_walls, mark, large, bad_pair, bad_wall_particle);
-      } else if (full) {
-        detail::force_pass_full<kRolling, kClamp>(
-            kin, n, q, c, dt, variant.fused_update, variant.serial_walls, acc, scratch, finish,
-            serial_walls, mark, large, bad_pair, bad_wall_particle);
-      } else {
-        detail::force_pass_shared<kRolling, kClamp>(kin, n, q, c, dt, atomic, variant.serial_walls,
-                                                    acc, thread_acc_, scratch, finish, serial_walls,
-                                                    mark, large, bad_pair, bad_wall_particle);
-      }
-    }
-  };
-  if (rolling) {
-    c.clamp ? passes.template operator()<true, true>() : passes.template operator()<true, false>();
-  } else {
-    c.clamp ? passes.template operator()<false, true>()
-            : passes.template operator()<false, false>();
-  }
-  if (full) {
-    q.hx.swap(q.hx_next);
-    q.hy.swap(q.hy_next);
-    q.hz.swap(q.hz_next);
-  }
-  const double t_end = omp_get_wtime();
-  // A fused pass finishes particles among the pairs: all of it counts as pair forces.
-  if (variant.fused_update) phase_end[0] = phase_end[1] = phase_end[2] = t_end;
-  const double t_pairs = phase_end[0];
-  const double t_reduced = phase_end[1] < 0 ? t_pairs : phase_end[1];
-  const double t_walls = phase_end[2] < 0 ? t_reduced : phase_end[2];
-  phases_.pair_forces_s += t_pairs - t0;
-  phases_.reduction_s += t_reduced - t_pairs;
-  phases_.walls_s += t_walls - t_reduced;
-  const double drift_s = drift_clock.drift_s();
-  phases_.update_s += t_end - t_walls - drift_s;
-  phases_.integrate_s += drift_s;
-  if (bad_pair != UINT32_MAX) check_pair_overlap(bad_pair);
-  if (bad_wall_particle != UINT32_MAX) {
-    fail("overlap with a wall above 10 % of the diameter", bad_wall_particle);
-  }
-  if (drifts) {  // no failure: every particle was drifted
-    drifted_ = true;
-    drifted_disp_sq_ = *std::max_element(drift_disp_sq.begin(), drift_disp_sq.end());
-    drifted_bad_ = *std::min_element(drift_bad.begin(), drift_bad.end());
-  }
-  large_overlaps_ += large;
+  static constexpr std::array kPasses{&Engine::compute_forces_on<StepIsa::kBaseline>,
+                                      &Engine::compute_forces_on<StepIsa::kAvx2>,
+                                      &Engine::compute_forces_on<StepIsa::kAvx512>};
+  const std::uint64_t large_before = large_overlaps_;
+  (this->*kPasses[static_cast<std::size_t>(step_isa_)])(final_kick, drift_next);
+  const std::uint64_t large = large_overlaps_ - large_before;
   if (large > 0 && !warned_ && settings_.warn_large_overlaps) {
     warned_ = true;
     fmt::print(stderr,

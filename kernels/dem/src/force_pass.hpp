@@ -1,7 +1,7 @@
 // The DEM force pass (private to src/): blocks of rows through the pair kernel (pair_rows), their
 // outputs summed per particle (ordered: in pair order for any thread count; per-thread arrays
 // or atomics: the report's accumulations), and each particle finished.
-#pragma once
+// Compiled once per instruction set (dem_isa.hpp): a toggle, no include guard.
 
 #include <omp.h>
 
@@ -9,9 +9,18 @@
 #include <cstdint>
 #include <vector>
 
+#include "dem_isa.hpp"
 #include "pair_block.hpp"
 
+#if defined(CONTACTLAB_DEM_FORCE_PASS_TOGGLE) == defined(CONTACTLAB_DEM_ISA_TOGGLE)
+#ifdef CONTACTLAB_DEM_FORCE_PASS_TOGGLE
+#undef CONTACTLAB_DEM_FORCE_PASS_TOGGLE
+#else
+#define CONTACTLAB_DEM_FORCE_PASS_TOGGLE
+#endif
+
 namespace contactlab::dem::detail {
+CONTACTLAB_DEM_ISA_NAMESPACE(build) {
 
 // Where the force pass's phases end (for PhaseTimes): the pairs, the reduction (ordered: the
 // j sides other threads left; per-thread: the arrays' sum), the serial walls.
@@ -394,4 +403,7 @@ void force_pass_full(const double* kin, std::size_t n, PairList& q, const PairCo
   combine_counts(large_here, bad_wall_here, large, bad_wall);
 }
 
+}  // CONTACTLAB_DEM_ISA_NAMESPACE(build)
 }  // namespace contactlab::dem::detail
+
+#endif

@@ -4,13 +4,23 @@
 // more than the pair law itself. GCC vector extensions: AVX-512 shuffles
 // where -march allows, narrower vectors elsewhere, the same values on every target. Clang
 // (clang-tidy) compiles it too: see CONTACTLAB_SHUFFLE.
-#pragma once
+// Compiled once per instruction set (dem_isa.hpp): a toggle, no include guard.
 
 #include <cmath>
 #include <cstdint>
 #include <cstring>
 
+#include "dem_isa.hpp"
+
+#if defined(CONTACTLAB_DEM_KIN_COLUMNS_TOGGLE) == defined(CONTACTLAB_DEM_ISA_TOGGLE)
+#ifdef CONTACTLAB_DEM_KIN_COLUMNS_TOGGLE
+#undef CONTACTLAB_DEM_KIN_COLUMNS_TOGGLE
+#else
+#define CONTACTLAB_DEM_KIN_COLUMNS_TOGGLE
+#endif
+
 namespace contactlab::dem::detail {
+CONTACTLAB_DEM_ISA_NAMESPACE(build) {
 
 using Lanes = double __attribute__((vector_size(64)));
 using LaneIndex = std::int64_t __attribute__((vector_size(64)));
@@ -42,7 +52,7 @@ template <class V>
 [[gnu::always_inline]] inline V shuffle_lanes(const V& a, const LaneIndex& mask) {
   return shuffle_lanes(a, a, mask);
 }
-#define CONTACTLAB_SHUFFLE ::contactlab::dem::detail::shuffle_lanes
+#define CONTACTLAB_SHUFFLE shuffle_lanes
 #else
 #define CONTACTLAB_SHUFFLE __builtin_shuffle
 #endif
@@ -133,6 +143,9 @@ struct KinColumns {
   return k;
 }
 
+}  // CONTACTLAB_DEM_ISA_NAMESPACE(build)
 }  // namespace contactlab::dem::detail
 
 #undef CONTACTLAB_SHUFFLE
+
+#endif

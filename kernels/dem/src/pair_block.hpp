@@ -2,7 +2,7 @@
 // law eight pairs at a time in registers (both particles' kin blocks loaded and transposed,
 // the law on SIMD lanes, its outputs transposed into one record per pair), the last few
 // pairs one by one with the same law on doubles.
-#pragma once
+// Compiled once per instruction set (dem_isa.hpp): a toggle, no include guard.
 
 #include <algorithm>
 #include <cmath>
@@ -12,9 +12,18 @@
 #include "contactlab/dem/contact_law.hpp"
 #include "contactlab/dem/force_variant.hpp"  // kRowsPerBlock
 #include "contactlab/dem/pair_list.hpp"
+#include "dem_isa.hpp"
 #include "kin_columns.hpp"
 
+#if defined(CONTACTLAB_DEM_PAIR_BLOCK_TOGGLE) == defined(CONTACTLAB_DEM_ISA_TOGGLE)
+#ifdef CONTACTLAB_DEM_PAIR_BLOCK_TOGGLE
+#undef CONTACTLAB_DEM_PAIR_BLOCK_TOGGLE
+#else
+#define CONTACTLAB_DEM_PAIR_BLOCK_TOGGLE
+#endif
+
 namespace contactlab::dem::detail {
+CONTACTLAB_DEM_ISA_NAMESPACE(build) {
 
 // Overlap thresholds, as fractions of the smaller radius: 1 % and 10 % of the diameter.
 constexpr double kWarnFraction = 0.02, kFailFraction = 0.2;
@@ -393,4 +402,7 @@ inline void pair_gathered(const double* kin, const PairList& q, const PairCoeffi
   }
 }
 
+}  // CONTACTLAB_DEM_ISA_NAMESPACE(build)
 }  // namespace contactlab::dem::detail
+
+#endif

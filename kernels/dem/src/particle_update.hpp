@@ -5,7 +5,7 @@
 // (the summed contact force and torque, gravity and drag, the final half kick). Every lane
 // does what the scalar tail does, in the same order, so where a range starts (it moves with
 // the thread count) changes no bit.
-#pragma once
+// Compiled once per instruction set (dem_isa.hpp): a toggle, no include guard.
 
 #include <algorithm>
 #include <cmath>
@@ -13,10 +13,19 @@
 #include <cstring>
 
 #include "contactlab/dem/particles.hpp"
+#include "dem_isa.hpp"
 #include "kin_columns.hpp"
 #include "pair_block.hpp"
 
+#if defined(CONTACTLAB_DEM_PARTICLE_UPDATE_TOGGLE) == defined(CONTACTLAB_DEM_ISA_TOGGLE)
+#ifdef CONTACTLAB_DEM_PARTICLE_UPDATE_TOGGLE
+#undef CONTACTLAB_DEM_PARTICLE_UPDATE_TOGGLE
+#else
+#define CONTACTLAB_DEM_PARTICLE_UPDATE_TOGGLE
+#endif
+
 namespace contactlab::dem::detail {
+CONTACTLAB_DEM_ISA_NAMESPACE(build) {
 
 // The particle arrays the passes read and write, as plain pointers held over a loop (a call
 // per particle reloaded each from its vector).
@@ -248,4 +257,7 @@ inline void drift_particles(Particles& p, double* kin, const DriftTerms& t, std:
   }
 }
 
+}  // CONTACTLAB_DEM_ISA_NAMESPACE(build)
 }  // namespace contactlab::dem::detail
+
+#endif

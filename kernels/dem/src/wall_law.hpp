@@ -3,7 +3,7 @@
 // particle's), its tangential spring kept per particle and wall. The walls' positions,
 // velocities and whether they still act are taken once per step; a particle's contacts are
 // then added to its force and torque sums by the force pass's finish.
-#pragma once
+// Compiled once per instruction set (dem_isa.hpp): a toggle, no include guard.
 
 #include <algorithm>
 #include <cmath>
@@ -13,9 +13,18 @@
 #include "contactlab/dem/contact_law.hpp"
 #include "contactlab/dem/particles.hpp"
 #include "contactlab/dem/walls.hpp"
+#include "dem_isa.hpp"
 #include "pair_block.hpp"
 
+#if defined(CONTACTLAB_DEM_WALL_LAW_TOGGLE) == defined(CONTACTLAB_DEM_ISA_TOGGLE)
+#ifdef CONTACTLAB_DEM_WALL_LAW_TOGGLE
+#undef CONTACTLAB_DEM_WALL_LAW_TOGGLE
+#else
+#define CONTACTLAB_DEM_WALL_LAW_TOGGLE
+#endif
+
 namespace contactlab::dem::detail {
+CONTACTLAB_DEM_ISA_NAMESPACE(build) {
 
 class WallLaw {
  public:
@@ -120,4 +129,7 @@ class WallLaw {
   std::vector<std::uint8_t> plane_, active_;  // a plane (no closest point); still in place
 };
 
+}  // CONTACTLAB_DEM_ISA_NAMESPACE(build)
 }  // namespace contactlab::dem::detail
+
+#endif

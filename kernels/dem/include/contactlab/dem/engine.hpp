@@ -23,6 +23,19 @@ namespace contactlab::dem {
 // v(t + dt/2) as in LAMMPS' default, which biases e by O(dt / t_c).
 enum class VelocityInForces { kSynchronised, kHalfStep };
 
+// The instruction set the step's hot loops (force pass, finish, drift) run on: each is compiled
+// for all three and chosen at run time, so that a portable build runs as fast as a native one
+// (src/dem_isa.hpp). Every set gives the same bits: the same operations in the same order,
+// without fused multiply-adds.
+enum class StepIsa { kBaseline, kAvx2, kAvx512 };
+// "baseline" (no AVX: the build's SSE level), "AVX2", "AVX-512".
+std::string to_string(StepIsa isa);
+// The set this process runs the step on: the detection's choice (contactlab/kernels/simd.hpp:
+// the best the CPU has, or CONTACTLAB_SIMD / select_simd_target), "AVX3..." as AVX-512, "AVX2"
+// as AVX2, anything else ("SSE4", "off", ...) as the baseline. On a CPU other than x86-64,
+// the baseline.
+StepIsa step_isa();
+
 struct EngineSettings {
   ContactLaw law;
   std::vector<Wall> walls;
@@ -148,6 +161,8 @@ class Engine {
   void restore(const State& state, Particles particles, PairList pairs);
 
   void set_threads(int threads) { settings_.threads = threads; }
+  // The instruction set of the step's hot loops: step_isa() when the engine was made.
+  StepIsa instruction_set() const { return step_isa_; }
   // From the next step on (e.g. re-tuned at a rebuild); throws InputError for a variant that
   // breaks a rule (force_variant.hpp).
   void set_force_variant(const ForceVariant& variant);
@@ -169,10 +184,17 @@ class Engine {
   // end_at_rebuild. Returns whether it rebuilt the neighbour list.
   bool advance(bool drift_next, bool end_at_rebuild = false);
   void compute_forces(bool final_kick, bool drift_next = false);
+  // engine_isa.cpp: compute_forces and advance's drift for each instruction set (specialised
+  // there, once per set); compute_forces and advance call step_isa_'s.
+  template <StepIsa kIsa>
+  void compute_forces_on(bool final_kick, bool drift_next);
+  template <StepIsa kIsa>
+  void drift_on(double& max_disp_sq, std::uint32_t& bad);
   void check_pair_overlap(std::size_t k) const;
   [[noreturn]] void fail(const std::string& what, std::uint32_t index) const;
 
   EngineSettings settings_;
+  StepIsa step_isa_ = step_isa();
   PairCoefficients coefficients_;
   Particles particles_;
   PairList pairs_;
