@@ -8,6 +8,8 @@
 //
 // The choice is process-wide: CONTACTLAB_SIMD=<name> in the environment sets it at the first
 // detection, select_simd_target() at any time (tests, a command's option).
+// The DEM step follows it too (contactlab/dem/engine.hpp, StepIsa): AVX3... runs its AVX-512
+// code, AVX2 its AVX2 code, anything else its baseline code.
 #pragma once
 
 #include <string>
