@@ -193,10 +193,11 @@ void ContactDetector::assemble_half_rows(int tid, int threads) {
   // One thread's block of every row (one thread): no row to ask about, none to pass on.
   const bool all_rows = lo == 0 && hi == found_count_.size();
 
-  // Count this thread's reverse entries of its own rows in one flat pass over its finds, noting
-  // where the others are (a pass home by home, each home's few finds a loop of its own, made the
-  // one-thread assembly a quarter slower: its exits mispredict). Then the noted finds become
-  // (row, home) pairs in place, their homes found by walking the homes' find counts once.
+  // Count this thread's reverse entries of its own rows in one flat pass over its finds (a pass
+  // home by home, each home's few finds a loop of its own, made the one-thread assembly a
+  // quarter slower: its exits mispredict). A find for another thread's row becomes a (row, home)
+  // pair at once, its home found by walking the homes' find counts alongside (the spills come in
+  // finding order, so the walk is one pass over the homes in all).
   mine.spills.clear();
   std::vector<std::uint64_t>& spill_begin = mine.spill_begin;
   spill_begin.assign(threads + 1, 0);
@@ -205,41 +206,38 @@ void ContactDetector::assemble_half_rows(int tid, int threads) {
   if (all_rows) {
     for (std::size_t at = 0; at < find_count; ++at) ++reverse[finds[at]];
   } else {
+    std::size_t k = 0, home_end = home_count > 0 ? found[homes[0]] : 0;
     for (std::size_t at = 0; at < find_count; ++at) {
       const std::uint32_t j = finds[at];
       if (own_row(j)) [[likely]] {
         ++reverse[j];
       } else {
-        std::uint32_t* const where = mine.spills.tail(2);  // the find's place, as two halves
-        where[0] = static_cast<std::uint32_t>(at);
-        where[1] = static_cast<std::uint32_t>(std::uint64_t{at} >> 32);
+        while (at >= home_end) home_end += found[homes[++k]];
+        std::uint32_t* const pair = mine.spills.tail(2);
+        pair[0] = j;
+        pair[1] = homes[k];
         mine.spills.advance(2);
+        ++spill_begin[block_of(j) + 1];
       }
     }
   }
-  if (mine.spills.size() > 0) {
-    std::uint32_t* const pairs = mine.spills.data();
-    std::size_t k = 0, home_end = home_count > 0 ? found[homes[0]] : 0;
-    for (std::size_t p = 0; p < mine.spills.size(); p += 2) {
-      const std::size_t at = pairs[p] | std::size_t{pairs[p + 1]} << 32;
-      while (at >= home_end) home_end += found[homes[++k]];
-      pairs[p] = finds[at];
-      pairs[p + 1] = homes[k];
-      ++spill_begin[block_of(pairs[p]) + 1];
-    }
-  }
   // Grouped by the assembling thread (a counting sort: groups in thread order, pairs in finding
-  // order within a group).
+  // order within a group), unless one thread takes them all (always so at two threads): then
+  // the finding order is the grouped one, and the pairs are read where they are (spilled_pairs).
   if (const std::size_t spilled = mine.spills.size(); spilled > 0) {
+    const bool one_group = std::any_of(spill_begin.begin() + 1, spill_begin.end(),
+                                       [&](std::uint64_t c) { return 2 * c == spilled; });
     for (int t = 0; t < threads; ++t) spill_begin[t + 1] += spill_begin[t];
-    mine.spills_by_row_block.resize(spilled);
-    std::vector<std::uint64_t> next(spill_begin.begin(), spill_begin.end() - 1);
-    const std::uint32_t* const pairs = mine.spills.data();
-    std::uint32_t* const grouped = mine.spills_by_row_block.data();
-    for (std::size_t p = 0; p < spilled; p += 2) {
-      const std::uint64_t to = 2 * next[block_of(pairs[p])]++;
-      grouped[to] = pairs[p];
-      grouped[to + 1] = pairs[p + 1];
+    if (!one_group) {
+      mine.spills_by_row_block.resize(spilled);
+      std::vector<std::uint64_t> next(spill_begin.begin(), spill_begin.end() - 1);
+      const std::uint32_t* const pairs = mine.spills.data();
+      std::uint32_t* const grouped = mine.spills_by_row_block.data();
+      for (std::size_t p = 0; p < spilled; p += 2) {
+        const std::uint64_t to = 2 * next[block_of(pairs[p])]++;
+        grouped[to] = pairs[p];
+        grouped[to + 1] = pairs[p + 1];
+      }
     }
   }
 #pragma omp barrier
@@ -248,7 +246,11 @@ void ContactDetector::assemble_half_rows(int tid, int threads) {
     for (int u = 0; u < threads; ++u) {
       const detail::ThreadOutput& from = thread_out_[u];
       if (u == tid || from.spills.size() == 0) continue;
-      const std::uint32_t* const pairs = from.spills_by_row_block.data();
+      const std::uint64_t spilled = from.spill_begin[threads];
+      // One group: the spills in finding order (assemble_half_rows skipped the grouping).
+      const bool one_group = from.spill_begin[tid + 1] - from.spill_begin[tid] == spilled;
+      const std::uint32_t* const pairs =
+          one_group ? from.spills.data() : from.spills_by_row_block.data();
       for (std::uint64_t p = from.spill_begin[tid]; p < from.spill_begin[tid + 1]; ++p)
         f(pairs[2 * p], pairs[2 * p + 1]);
     }
