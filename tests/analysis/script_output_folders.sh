@@ -43,6 +43,8 @@ expect_blocked retune-study $py scripts/retune-study --quick --contactlab "$B" -
 expect_blocked detect-compare $py scripts/detect-compare /bin/false /bin/false \
   --scene "s=$blocker:0.05" --variant particle/sorted/full/static --json "$blocker/a/b/c.json"
 expect_blocked bench-compare $py scripts/bench-compare /bin/false /bin/false --json "$blocker/a/c.json"
+expect_blocked dem-isa-compare $py scripts/dem-isa-compare --run a=/bin/false \
+  --config experiments/dem/drop-box.json --restart "$blocker" --json "$blocker/a/c.json"
 
 # Made at the start: the DEM studies' folders before their first run (which /bin/false fails),
 # detect-compare's --json folder with a run of two detections.
@@ -56,6 +58,15 @@ $py scripts/detect-compare "$B" "$B" --scene "s=$dir/s.bin:0.05" \
   --json "$dir/cmp/a/b/c.json" >"$dir/detect-compare-made.out" 2>&1 ||
   { echo "detect-compare failed:"; cat "$dir/detect-compare-made.out"; status=1; }
 [ -f "$dir/cmp/a/b/c.json" ] || { echo "detect-compare wrote no $dir/cmp/a/b/c.json"; status=1; }
+# dem-isa-compare: the --json folder made, and a record naming the set each run's step ran on.
+"$B" dem run experiments/dem/drop-box.json --steps 20 --checkpoint "$dir/drop.chk" \
+  >"$dir/drop.out" 2>&1 || { echo "dem run failed:"; cat "$dir/drop.out"; status=1; }
+$py scripts/dem-isa-compare --run best="$B" --run baseline="$B:SSE4" \
+  --config experiments/dem/drop-box.json --restart "$dir/drop.chk" --steps 5 --rounds 1 \
+  --json "$dir/isa/a/b/c.json" >"$dir/dem-isa-compare-made.out" 2>&1 ||
+  { echo "dem-isa-compare failed:"; cat "$dir/dem-isa-compare-made.out"; status=1; }
+grep -q '"step_isa": "baseline"' "$dir/isa/a/b/c.json" 2>/dev/null ||
+  { echo "dem-isa-compare wrote no record of the baseline run in $dir/isa/a/b/c.json"; status=1; }
 
 [ $status = 0 ] && echo ok
 exit $status

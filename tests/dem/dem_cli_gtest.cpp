@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "contactlab/dem/engine.hpp"
 #include "program_test_support.hpp"
 
 namespace contactlab::test {
@@ -53,6 +54,17 @@ TEST(DemCli, RunWritesFramesSeriesAndEnergy) {
   const std::string csv = slurp(root(dir) / "drop_energy.csv");
   EXPECT_EQ(csv.rfind("time_s,step,kinetic_J,potential_J,dissipated_J\n", 0), 0u);
   EXPECT_TRUE(fs::exists(root(dir) / "last.chk"));
+  // The instruction set the step ran on, named on the done line.
+  EXPECT_NE(r.output.find(", step on " + dem::to_string(dem::step_isa()) + "\n"), std::string::npos)
+      << r.output;
+}
+
+// The step on the set CONTACTLAB_SIMD asks for (below AVX2: the baseline), and said so.
+TEST(DemCli, RunNamesTheInstructionSetItWasToldToUse) {
+  const auto r = run_command("CONTACTLAB_SIMD=off " + contactlab_exe() + " dem run " +
+                             config_path() + " --steps 20");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find(", step on baseline\n"), std::string::npos) << r.output;
 }
 
 TEST(DemCli, RestartReproducesTheUninterruptedFrames) {
