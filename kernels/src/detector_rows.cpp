@@ -123,14 +123,16 @@ void ContactDetector::choose_row_blocks(int tid, int threads) {
   const detail::PartnerBuffer& homes = thread_out_[tid].homes;
   const std::size_t count = homes.size();
   const bool one_run = count == 0 || homes.data()[count - 1] - homes.data()[0] + 1 == count;
-  home_run_[2 * tid] = count == 0 ? 0 : homes.data()[0];
-  home_run_[2 * tid + 1] = one_run ? count : UINT32_MAX;  // UINT32_MAX: not one run
+  const std::size_t slot = 2 * static_cast<std::size_t>(tid);  // this thread's (first, size)
+  home_run_[slot] = count == 0 ? 0 : homes.data()[0];
+  home_run_[slot + 1] = one_run ? count : UINT32_MAX;  // UINT32_MAX: not one run
 #pragma omp barrier
   std::uint64_t next = 0;  // the row after the runs so far
   std::uint32_t mine = 0;  // this thread's first row
   bool back_to_back = true;
   for (int t = 0; t < threads && back_to_back; ++t) {
-    const std::uint64_t first = home_run_[2 * t], size = home_run_[2 * t + 1];
+    const std::size_t run = 2 * static_cast<std::size_t>(t);
+    const std::uint64_t first = home_run_[run], size = home_run_[run + 1];
     if (t == tid) mine = static_cast<std::uint32_t>(next);
     if (size == 0) continue;
     back_to_back = size != UINT32_MAX && first == next;

@@ -313,6 +313,7 @@ Calibration calibrate_machine(const TuneOptions& options, int threads,
       return 0.0;
     };
     std::vector<OutputCost> output;
+    output.reserve(thread_counts.size());
     for (const int t : thread_counts) {
       output.push_back({t, degrees[kLowDegreeScene], per_entry(kLowDegreeScene, t),
                         degrees[kHighDegreeScene], per_entry(kHighDegreeScene, t)});
