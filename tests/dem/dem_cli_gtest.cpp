@@ -284,6 +284,14 @@ TEST(DemCli, ProfileJsonHasMeasuredEmulatedAndTheCheck) {
     EXPECT_LE(m["step_s"]["low"].get<double>(), m["step_s"]["median"].get<double>());
     EXPECT_LE(m["step_s"]["median"].get<double>(), m["step_s"]["high"].get<double>());
     EXPECT_EQ(m["step_s"]["repetitions"], 3);
+    // Each round's own speed-up: its one-thread step over this one, 1 at one thread.
+    ASSERT_EQ(m["round_step_s"].size(), 3u);
+    ASSERT_EQ(m["round_speedups"].size(), 3u);
+    for (std::size_t k = 0; k < 3; ++k) {
+      EXPECT_DOUBLE_EQ(
+          m["round_speedups"][k].get<double>(),
+          doc["measured"][0]["round_step_s"][k].get<double>() / m["round_step_s"][k].get<double>());
+    }
   }
   std::vector<int> emulated;
   for (const auto& e : doc["emulated"]) emulated.push_back(e["threads"].get<int>());
