@@ -67,6 +67,7 @@ StepIsa step_isa() {
 #define CONTACTLAB_DEM_ISA_NAMESPACE(name) namespace avx512
 #define CONTACTLAB_DEM_ISA_NS avx512
 #define CONTACTLAB_DEM_ISA_ID StepIsa::kAvx512
+#define CONTACTLAB_DEM_LANE_PARTS 1  // eight doubles a register (lanes.hpp)
 CONTACTLAB_TARGET_PUSH(
     "avx512f,avx512vl,avx512dq,avx512bw,avx512cd,avx2,fma,bmi,bmi2,lzcnt,popcnt,f16c")
 #include "engine_step.inc"
@@ -74,22 +75,26 @@ CONTACTLAB_TARGET_POP()
 #undef CONTACTLAB_DEM_ISA_NAMESPACE
 #undef CONTACTLAB_DEM_ISA_NS
 #undef CONTACTLAB_DEM_ISA_ID
+#undef CONTACTLAB_DEM_LANE_PARTS
 
 #define CONTACTLAB_DEM_ISA_TOGGLE  // the headers once more
 #define CONTACTLAB_DEM_ISA_NAMESPACE(name) namespace avx2
 #define CONTACTLAB_DEM_ISA_NS avx2
 #define CONTACTLAB_DEM_ISA_ID StepIsa::kAvx2
+#define CONTACTLAB_DEM_LANE_PARTS 2  // four
 CONTACTLAB_TARGET_PUSH("no-avx512f,avx2,fma,bmi,bmi2,lzcnt,popcnt,f16c")
 #include "engine_step.inc"
 CONTACTLAB_TARGET_POP()
 #undef CONTACTLAB_DEM_ISA_NAMESPACE
 #undef CONTACTLAB_DEM_ISA_NS
 #undef CONTACTLAB_DEM_ISA_ID
+#undef CONTACTLAB_DEM_LANE_PARTS
 
 #undef CONTACTLAB_DEM_ISA_TOGGLE  // and once more
 #define CONTACTLAB_DEM_ISA_NAMESPACE(name) namespace baseline
 #define CONTACTLAB_DEM_ISA_NS baseline
 #define CONTACTLAB_DEM_ISA_ID StepIsa::kBaseline
+#define CONTACTLAB_DEM_LANE_PARTS 4  // two
 CONTACTLAB_TARGET_PUSH("no-avx")
 #include "engine_step.inc"
 CONTACTLAB_TARGET_POP()

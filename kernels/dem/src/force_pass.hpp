@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "dem_isa.hpp"
+#include "lanes.hpp"
 #include "pair_block.hpp"
 
 #if defined(CONTACTLAB_DEM_FORCE_PASS_TOGGLE) == defined(CONTACTLAB_DEM_ISA_TOGGLE)
@@ -42,9 +43,8 @@ inline void combine_counts(std::uint64_t here, std::uint32_t bad_here, std::uint
 // (1, 1, 1, r, r, r, touch, 0): a pair record times it is its force, r times its n x F_t and
 // touch times its touching flag. A broadcast and a blend, not eight inserts.
 [[gnu::always_inline]] inline Lanes record_scale(double r, double touch) {
-  constexpr LaneIndex kRadiusLanes{0, 0, 0, -1, -1, -1, 0, 0};
-  const Lanes fixed{1, 1, 1, 0, 0, 0, touch, 0};
-  return kRadiusLanes ? Lanes{} + r : fixed;
+  const LaneMask radius_lanes = mask_of({0, 0, 0, -1, -1, -1, 0, 0});
+  return select(radius_lanes, Lanes{} + r, lanes_of({1, 1, 1, 0, 0, 0, touch, 0}));
 }
 
 // Pair b's j side (its record p, rolling torques roll[.][b]) subtracted from the sums aj of
@@ -54,7 +54,7 @@ template <bool kRolling>
 [[gnu::always_inline]] inline void subtract_j_side(double* aj, const double* p, double rj,
                                                    const double* const* roll, std::size_t b) {
   Lanes sum = load_lanes(aj) - load_lanes(p) * record_scale(rj, -1.0);
-  if constexpr (kRolling) sum -= Lanes{0, 0, 0, roll[0][b], roll[1][b], roll[2][b], 0, 0};
+  if constexpr (kRolling) sum -= lanes_of({0, 0, 0, roll[0][b], roll[1][b], roll[2][b], 0, 0});
   store_lanes(aj, sum);
 }
 
@@ -78,7 +78,7 @@ inline void sum_rows(const PairList& q, std::size_t first, std::size_t last, Pai
       const double* p = rec + kLanes * b;
       sum += load_lanes(p) * scale;
       // + 0 keeps every lane's bits: no sum here is -0 (sums from +0 never are).
-      if constexpr (kRolling) sum += Lanes{0, 0, 0, roll[0][b], roll[1][b], roll[2][b], 0, 0};
+      if constexpr (kRolling) sum += lanes_of({0, 0, 0, roll[0][b], roll[1][b], roll[2][b], 0, 0});
       j_side(p, roll, k, b);
     }
     store(i, sum);
@@ -106,10 +106,9 @@ inline void assign_rows(const PairList& q, std::size_t first, std::size_t last, 
     const std::size_t b = k - k0;
     const double* p = rec + kLanes * b;
     // All ones in the row, zero at its first pair: sum & keep is sum or +0, no branch.
-    const LaneIndex keep = LaneIndex{} - static_cast<std::int64_t>(i == current);
-    sum = reinterpret_cast<Lanes>(reinterpret_cast<LaneIndex>(sum) & keep);
+    sum = keep_if(sum, i == current);
     sum += load_lanes(p) * record_scale(-kin[kKinStride * i + 3], 1.0);
-    if constexpr (kRolling) sum += Lanes{0, 0, 0, roll[0][b], roll[1][b], roll[2][b], 0, 0};
+    if constexpr (kRolling) sum += lanes_of({0, 0, 0, roll[0][b], roll[1][b], roll[2][b], 0, 0});
     store_lanes(acc + kAccStride * i, sum);
     j_side(p, roll, k, b);
     current = i;

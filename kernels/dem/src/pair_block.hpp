@@ -14,6 +14,7 @@
 #include "contactlab/dem/pair_list.hpp"
 #include "dem_isa.hpp"
 #include "kin_columns.hpp"
+#include "lanes.hpp"
 
 #if defined(CONTACTLAB_DEM_PAIR_BLOCK_TOGGLE) == defined(CONTACTLAB_DEM_ISA_TOGGLE)
 #ifdef CONTACTLAB_DEM_PAIR_BLOCK_TOGGLE
@@ -76,13 +77,13 @@ template <class V>
   const V ft_sq = ftx * ftx + fty * fty + ftz * ftz;
   const V limit = mu * fn;
   const auto slip = ft_sq > limit * limit;
-  const V scale = slip ? limit / sqrt_of(ft_sq) : splat<V>(1.0);
+  const V scale = select(slip, limit / sqrt_of(ft_sq), splat<V>(1.0));
   ftx *= scale;
   fty *= scale;
   ftz *= scale;
-  hx = slip ? -(ftx + ct * vtx) * inv_kt : hx;
-  hy = slip ? -(fty + ct * vty) * inv_kt : hy;
-  hz = slip ? -(ftz + ct * vtz) * inv_kt : hz;
+  hx = select(slip, -(ftx + ct * vtx) * inv_kt, hx);
+  hy = select(slip, -(fty + ct * vty) * inv_kt, hy);
+  hz = select(slip, -(ftz + ct * vtz) * inv_kt, hz);
   return {ftx, fty, ftz};
 }
 
@@ -119,8 +120,8 @@ template <bool kRolling, bool kClamp, class V>
   const V delta = rr - dist;
   const V zero{}, one = splat<V>(1.0);
   PairOutputs<V> out;
-  const V flag = delta > kFailFraction * in.rmin ? splat<V>(2.0) : one;
-  out.flag = (touch & (delta > kWarnFraction * in.rmin)) ? flag : zero;
+  const V flag = select(delta > kFailFraction * in.rmin, splat<V>(2.0), one);
+  out.flag = select(touch & (delta > kWarnFraction * in.rmin), flag, zero);
   // Relative velocity of the contact point: v_i - v_j - (r_i w_i + r_j w_j) x n.
   const V sx = in.sx, sy = in.sy, sz = in.sz;
   const V vx = in.dvx - (sy * nz - sz * ny);
@@ -129,32 +130,32 @@ template <bool kRolling, bool kClamp, class V>
   const V vn = vx * nx + vy * ny + vz * nz;
   const V kn = c.k_abs + c.k_per_mass * in.m_star, cn = c.c_per_mass * in.m_star;
   V fn = kn * delta - cn * vn;
-  if constexpr (kClamp) fn = fn < 0.0 ? zero : fn;  // std::max(fn, 0.0)
+  if constexpr (kClamp) fn = select(fn < 0.0, zero, fn);  // std::max(fn, 0.0)
   V hx = in.hx, hy = in.hy, hz = in.hz;
   const Tangential<V> ft =
       tangential<V>(nx, ny, nz, vx - vn * nx, vy - vn * ny, vz - vn * nz, fn, c.kt_ratio * kn,
                     in.inv_kt, c.ct_ratio * cn, c.mu, dt, hx, hy, hz);
-  in.hx = touch ? hx : zero;
-  in.hy = touch ? hy : zero;
-  in.hz = touch ? hz : zero;
+  in.hx = select(touch, hx, zero);
+  in.hy = select(touch, hy, zero);
+  in.hz = select(touch, hz, zero);
   const V fpx = fn * nx + ft.ftx, fpy = fn * ny + ft.fty, fpz = fn * nz + ft.ftz;
-  out.fx = touch ? fpx : zero;
-  out.fy = touch ? fpy : zero;
-  out.fz = touch ? fpz : zero;
-  out.cx = touch ? ny * ft.ftz - nz * ft.fty : zero;
-  out.cy = touch ? nz * ft.ftx - nx * ft.ftz : zero;
-  out.cz = touch ? nx * ft.fty - ny * ft.ftx : zero;
+  out.fx = select(touch, fpx, zero);
+  out.fy = select(touch, fpy, zero);
+  out.fz = select(touch, fpz, zero);
+  out.cx = select(touch, ny * ft.ftz - nz * ft.fty, zero);
+  out.cy = select(touch, nz * ft.ftx - nx * ft.ftz, zero);
+  out.cz = select(touch, nx * ft.fty - ny * ft.ftx, zero);
   // A contact with a zero force (e.g. the clamp) does not count as touching.
-  out.touch = touch & ((fpx != 0.0) | (fpy != 0.0) | (fpz != 0.0)) ? one : zero;
+  out.touch = select(touch & ((fpx != 0.0) | (fpy != 0.0) | (fpz != 0.0)), one, zero);
   if constexpr (kRolling) {
     // Constant rolling-resistance torque against the relative rotation (model A).
     const V ox = in.dwx, oy = in.dwy, oz = in.dwz;
     const V om = sqrt_of(ox * ox + oy * oy + oz * oz);
     const V s_any = -c.mu_roll * fn * (in.rprod / rr) / om;  // dropped where om = 0
-    const V s = om > 0.0 ? s_any : zero;
-    out.roll_x = touch ? s * ox : zero;
-    out.roll_y = touch ? s * oy : zero;
-    out.roll_z = touch ? s * oz : zero;
+    const V s = select(om > 0.0, s_any, zero);
+    out.roll_x = select(touch, s * ox, zero);
+    out.roll_y = select(touch, s * oy, zero);
+    out.roll_z = select(touch, s * oz, zero);
   }
   return out;
 }
@@ -172,7 +173,7 @@ inline PairInputs<double> pack_one(const double* kin, const PairList& q, std::si
   in.dy = ki[1] - kj[1] - sh[1];
   in.dz = ki[2] - kj[2] - sh[2];
   in.rr = ri + rj;
-  in.rmin = rj < ri ? rj : ri;
+  in.rmin = select(rj < ri, rj, ri);
   in.dvx = ki[4] - kj[4];
   in.dvy = ki[5] - kj[5];
   in.dvz = ki[6] - kj[6];
@@ -211,19 +212,19 @@ template <bool kRolling>
   std::uint64_t codes;
   std::memcpy(&codes, images, sizeof codes);
   if (codes != 0x0101010101010101u * kNoImage) [[unlikely]] {
-    Lanes sx, sy, sz;
+    double sx[kLanes], sy[kLanes], sz[kLanes];
     for (std::size_t l = 0; l < kLanes; ++l) {
       const auto& sh = q.shift[images[l]];
       sx[l] = sh[0];
       sy[l] = sh[1];
       sz[l] = sh[2];
     }
-    in.dx -= sx;
-    in.dy -= sy;
-    in.dz -= sz;
+    in.dx -= lanes_of(sx);
+    in.dy -= lanes_of(sy);
+    in.dz -= lanes_of(sz);
   }
   in.rr = pi.r + pj.r;
-  in.rmin = pj.r < pi.r ? pj.r : pi.r;
+  in.rmin = select(pj.r < pi.r, pj.r, pi.r);
   in.dvx = pi.vx - pj.vx;
   in.dvy = pi.vy - pj.vy;
   in.dvz = pi.vz - pj.vz;
@@ -386,11 +387,11 @@ inline void pair_gathered(const double* kin, const PairList& q, const PairCoeffi
     PairInputs<Lanes> in = pack_eight<kRolling>(kin, q, ii, jj, images);
     for (std::size_t l = 0; l < kLanes; ++l) {
       const std::uint32_t k = pairs[b + l];
-      in.m_star[l] = q.m_star[k];
-      in.inv_kt[l] = q.inv_kt[k];
-      in.hx[l] = q.hx[k];
-      in.hy[l] = q.hy[k];
-      in.hz[l] = q.hz[k];
+      set_lane(in.m_star, l, q.m_star[k]);
+      set_lane(in.inv_kt, l, q.inv_kt[k]);
+      set_lane(in.hx, l, q.hx[k]);
+      set_lane(in.hy, l, q.hy[k]);
+      set_lane(in.hz, l, q.hz[k]);
     }
     store_outputs<kRolling>(blk, b, pair_law<kRolling, kClamp>(c, dt, in), false, 0, unused_large,
                             unused_bad);

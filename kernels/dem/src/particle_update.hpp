@@ -15,6 +15,7 @@
 #include "contactlab/dem/particles.hpp"
 #include "dem_isa.hpp"
 #include "kin_columns.hpp"
+#include "lanes.hpp"
 #include "pair_block.hpp"
 
 #if defined(CONTACTLAB_DEM_PARTICLE_UPDATE_TOGGLE) == defined(CONTACTLAB_DEM_ISA_TOGGLE)
@@ -85,9 +86,7 @@ inline void finish_particles(const double* kin, const double* acc, Particles& p,
     Lanes pvx, pvy, pvz, mass;  // the synchronised velocity and the mass: lanes 4..7 of kin
     top_columns(kin_rows, pvx, pvy, pvz, mass);
     transpose8(sum_rows, s);
-    using Counts = std::uint16_t __attribute__((vector_size(2 * kLanes)));
-    const Counts touching = __builtin_convertvector(s[6], Counts);  // exact: sums of ones
-    std::memcpy(arrays.contacts + a, &touching, sizeof touching);
+    store_counts(arrays.contacts + a, s[6]);  // exact: sums of ones
     Lanes fx = s[0], fy = s[1], fz = s[2];
     store_lanes(arrays.force_magnitude + a, sqrt_lanes(fx * fx + fy * fy + fz * fz));
     fx -= drag * pvx;
@@ -204,7 +203,7 @@ inline void drift_particles(Particles& p, double* kin, const DriftTerms& t, std:
     const Lanes ddx = xa - load_lanes(arrays.x0 + a), ddy = ya - load_lanes(arrays.y0 + a),
                 ddz = za - load_lanes(arrays.z0 + a);
     const Lanes disp = ddx * ddx + ddy * ddy + ddz * ddz;
-    disp_max = disp_max < disp ? disp : disp_max;
+    disp_max = select(disp_max < disp, disp, disp_max);
     const Lanes step_sq = mx * mx + my * my + mz * mz, sum = xa + ya + za;
     // x - x is 0 exactly when x is finite (inf - inf and NaN - NaN are NaN).
     // NOLINTNEXTLINE(misc-redundant-expression): that finiteness test, on purpose
