@@ -46,6 +46,7 @@ Subcommand add_tune_command(CLI::App& app, const std::string& command_line);
 Subcommand add_partition_command(CLI::App& app);
 Subcommand add_emulate_command(CLI::App& app, const std::string& command_line);
 Subcommand add_demo_command(CLI::App& app);
+Subcommand add_probe_command(CLI::App& app, const std::string& command_line);
 Subcommand add_dem_command(CLI::App& app, const std::string& command_line);
 // `dem variants` and `dem profile`, under the dem command (dem_study_command.cpp).
 std::vector<Subcommand> add_dem_study_commands(CLI::App& dem_app, const std::string& command_line);

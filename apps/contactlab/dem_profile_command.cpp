@@ -9,6 +9,7 @@
 #include <map>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <set>
 #include <string>
 #include <vector>
@@ -17,6 +18,7 @@
 #include "contactlab/kernels/atomic_file.hpp"
 #include "contactlab/kernels/error.hpp"
 #include "contactlab/support/statistics.hpp"
+#include "contactlab/tuner/bandwidth_probe.hpp"
 #include "contactlab/tuner/context.hpp"
 #include "contactlab/tuner/thread_emulation.hpp"
 #include "contactlab/tuner_dem/force_model.hpp"
@@ -60,6 +62,10 @@ struct DemProfileCommand {
   DemStart start_;
   std::string variant_ = "ordered/static";
   std::vector<int> emulate_;
+  // The memory system the emulation prices bytes against (docs/emulation.md, "Bandwidth").
+  std::string machine_file_;
+  double ceiling_gb_s_ = 0.0;
+  std::string ceiling_source_;
   int rounds_ = 1;
   std::string json_out_;
   std::string command_line_;
@@ -75,6 +81,18 @@ int DemProfileCommand::run() const {
   if (rounds_ < 1) throw InputError("--rounds must be >= 1");
   for (const int t : emulate_) {
     if (t < 1) throw InputError("--emulate: every thread count must be >= 1");
+  }
+  std::optional<tn::MachineProbe> machine;
+  if (!machine_file_.empty()) {
+    if (emulate_.empty()) throw InputError("--machine prices the emulation: give --emulate too");
+    machine = tn::read_machine_file(machine_file_);
+  }
+  if (ceiling_gb_s_ != 0.0) {
+    if (!machine) throw InputError("--bandwidth-ceiling extends a machine file: give --machine");
+    if (!(ceiling_gb_s_ > 0.0)) throw InputError("--bandwidth-ceiling must be > 0 (GB/s)");
+    if (ceiling_source_.empty()) {
+      throw InputError("--bandwidth-ceiling needs --ceiling-source (where the figure comes from)");
+    }
   }
   if (!json_out_.empty()) prepare_output_file(json_out_);
   const std::uint64_t steps = start_.steps;
@@ -156,6 +174,7 @@ int DemProfileCommand::run() const {
       "e.g. memory bandwidth, load imbalance or a busy core)\n");
 
   nlohmann::json emulated_json = nlohmann::json::array(), checks = nlohmann::json::array();
+  nlohmann::json bandwidth_json;  // null without --machine
   if (!emulate_.empty()) {
     // The model's costs at one thread, the pair list of the common start.
     const dem::ForceCosts costs = dem::calibrate_force_costs(make_engine, 1, steps);
@@ -171,23 +190,49 @@ int DemProfileCommand::run() const {
     std::set<int> counts(emulate_.begin(), emulate_.end());
     for (const Rounds& m : measured) counts.insert(m.threads);
     const std::vector<int> all(counts.begin(), counts.end());
-    const std::vector<dem::EmulatedStep> emulated =
-        dem::emulate_steps(work, variant, costs, {1, one, one_step},
-                           {widest.threads, widest.median_phases(), median(widest.step_s)}, all);
+    // The bytes a step moves, priced against the probed working set that holds the footprint.
+    const dem::StepTraffic traffic = dem::step_traffic(particles.size(), work.total_pairs());
+    std::optional<tn::BandwidthCurve> curve;
+    if (machine) {
+      std::vector<std::uint64_t> sizes;
+      for (const tn::ProbedWorkingSet& set : machine->working_sets) sizes.push_back(set.bytes);
+      const tn::ProbedWorkingSet& set =
+          machine->working_sets[tn::working_set_for(sizes, traffic.footprint_bytes)];
+      curve = tn::curve_of(set, ceiling_gb_s_ * 1e9);
+      bandwidth_json = {{"machine_file", machine_file_},
+                        {"working_set_bytes", set.bytes},
+                        {"footprint_bytes", traffic.footprint_bytes},
+                        {"bytes_per_step", traffic.bytes},
+                        {"ceiling_bytes_per_s", ceiling_gb_s_ * 1e9},
+                        {"ceiling_source", ceiling_source_}};
+      fmt::print(
+          "\nbandwidth: {} ({:.0f} MiB working set for a {:.0f} MiB footprint), {:.1f} MB a step "
+          "in the force pass and the drift; beyond the probed threads {}\n",
+          machine_file_, static_cast<double>(set.bytes) / (1 << 20),
+          static_cast<double>(traffic.footprint_bytes) / (1 << 20), traffic.bytes / 1e6,
+          ceiling_gb_s_ > 0 ? fmt::format("towards {} GB/s ({})", ceiling_gb_s_, ceiling_source_)
+                            : std::string("the last probed bandwidth (no ceiling stated)"));
+    }
+    const std::vector<dem::EmulatedStep> emulated = dem::emulate_steps(
+        work, variant, costs, {1, one, one_step},
+        {widest.threads, widest.median_phases(), median(widest.step_s)}, all, curve, traffic);
     const double base = emulated.front().step_s();
-    fmt::print("\nemulated (force pass replayed by the force model, calibrated at 1 thread):\n");
+    fmt::print("\nemulated (force pass replayed by the force model, calibrated at 1 thread{}):\n",
+               curve ? "; force pass and drift at least their bytes over the bandwidth" : "");
     fmt::print("{:>7} {:>12} {:>9} {:>13}\n", "threads", "s/step", "speedup", "Amdahl bound");
     std::map<int, double> by_threads;
     for (const dem::EmulatedStep& e : emulated) {
       by_threads[e.threads] = e.step_s();
       fmt::print("{:>7} {:>12.4g} {:>9.3f} {:>13.3f}\n", e.threads, e.step_s(), base / e.step_s(),
                  amdahl(serial, e.threads));
-      emulated_json.push_back({{"threads", e.threads},
-                               {"step_s", e.step_s()},
-                               {"neighbor_s", e.neighbor_s},
-                               {"force_s", e.force_s},
-                               {"integrate_s", e.integrate_s},
-                               {"speedup", base / e.step_s()}});
+      nlohmann::json point{{"threads", e.threads},         {"step_s", e.step_s()},
+                           {"neighbor_s", e.neighbor_s},   {"force_s", e.force_s},
+                           {"integrate_s", e.integrate_s}, {"speedup", base / e.step_s()}};
+      if (curve) {
+        point["bytes_per_s"] = e.bytes_per_s;
+        point["memory_s"] = e.memory_s;
+      }
+      emulated_json.push_back(point);
     }
     for (const Rounds& m : measured) {
       if (m.threads == 1) continue;
@@ -229,6 +274,7 @@ int DemProfileCommand::run() const {
         {"amdahl_bound", bounds},
         {"measured", measured_json},
         {"emulated", emulated_json},
+        {"bandwidth", bandwidth_json},
         {"validation", checks},
         {"method",
          "Measured: each thread count in interleaved rounds, every round from the same start "
@@ -237,9 +283,11 @@ int DemProfileCommand::run() const {
          "(an upper bound). Emulated: the force pass replayed by the force model (libgomp's "
          "schedules over the pair list's blocks) with costs calibrated at one thread and scaled "
          "to the measured one-thread pass; the neighbour list and the integration as serial + "
-         "parallel/P fitted from their 1- and widest-measured-thread times. Not modelled: memory "
-         "bandwidth and shared caches as threads are added, j sides landing in other threads' "
-         "blocks."}};
+         "parallel/P fitted from their 1- and widest-measured-thread times; with a machine file "
+         "(bandwidth), the force pass and the drift together at least their bytes a step (from the "
+         "work counts and the layout) over the bandwidth the thread count draws: the probe's "
+         "curve, beyond its threads a saturating law towards the stated ceiling. Not modelled: "
+         "shared caches as threads are added, j sides landing in other threads' blocks."}};
     write_file_atomically(json_out_, [&](std::ostream& out) { out << doc.dump(2) << '\n'; });
     fmt::print("wrote {}\n", json_out_);
   }
@@ -260,6 +308,14 @@ Subcommand add_dem_profile_command(CLI::App& dem_app, const std::string& command
                   "also emulate these thread counts (e.g. 4,8,16; the step replayed by the force "
                   "model, checked at the measured counts)")
       ->delimiter(',');
+  app->add_option("--machine", profile->machine_file_,
+                  "--emulate: also price the force pass and drift by their bytes at the bandwidth "
+                  "of this machine file (`contactlab probe --json`)");
+  app->add_option("--bandwidth-ceiling", profile->ceiling_gb_s_,
+                  "--machine: the bandwidth the probed curve saturates towards beyond the "
+                  "machine's cores, GB/s (default: the last probed value)");
+  app->add_option("--ceiling-source", profile->ceiling_source_,
+                  "where the ceiling comes from (required with --bandwidth-ceiling)");
   app->add_option("--rounds", profile->rounds_,
                   "interleaved rounds over the thread counts (medians and 95% intervals; 1)");
   app->add_option("--json", profile->json_out_, "write the profile (docs/emulation.md)");

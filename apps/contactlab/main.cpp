@@ -45,6 +45,7 @@ int main(int argc, char** argv) {  // NOLINT(bugprone-exception-escape)
                                                  cli::add_partition_command(app),
                                                  cli::add_emulate_command(app, command_line),
                                                  cli::add_demo_command(app),
+                                                 cli::add_probe_command(app, command_line),
                                                  cli::add_dem_command(app, command_line)};
 
   try {

@@ -1,0 +1,53 @@
+// `contactlab probe`: the memory bandwidth this machine's threads draw, STREAM's triad
+// (a[i] = b[i] + s c[i]) at each thread count and working-set size, written to a machine file
+// that the emulations read (tuner_model/bandwidth.hpp; docs/emulation.md, "Bandwidth").
+#pragma once
+
+#include <cstdint>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "contactlab/tuner/context.hpp"
+#include "contactlab/tuner_model/bandwidth.hpp"
+
+namespace contactlab::tuner {
+
+struct ProbeOptions {
+  std::vector<int> threads;  // ascending, distinct, >= 1 (the command's default: 1 .. cores)
+  // The three arrays together, bytes: from cache-resident to beyond any last-level cache.
+  std::vector<std::uint64_t> working_sets{16ull << 20, 64ull << 20, 256ull << 20, 1ull << 30};
+  int repetitions =
+      5;  // timed passes per point after one untimed; the best is kept (STREAM's rule)
+};
+
+struct ProbedWorkingSet {
+  std::uint64_t bytes = 0;
+  std::vector<std::pair<int, double>> bytes_per_s;  // (threads, best triad bandwidth)
+};
+
+struct MachineProbe {
+  std::vector<ProbedWorkingSet> working_sets;  // ascending by bytes
+};
+
+// Throws InputError, naming the problem, for no thread counts, one below 1, counts not ascending
+// and distinct, no working set, one below 3 KiB or not ascending, or repetitions < 1.
+void validate(const ProbeOptions& options);
+
+// Measures every working set at every thread count (the arrays first touched by the most
+// threads, with the static schedule the timed passes use). Validates first.
+MachineProbe probe_bandwidth(const ProbeOptions& options);
+
+// The machine file (docs/emulation.md, "contactlab-machine-probe").
+nlohmann::json probe_document(const MachineProbe& probe, const ProbeOptions& options,
+                              const Context& context);
+
+// A machine file read back strictly (unknown or missing fields, wrong kinds, bad curves: an
+// InputError naming the file and the JSON path).
+MachineProbe read_machine_file(const std::string& path);
+
+// A working set's curve with a stated ceiling (bytes/s; 0 for none).
+BandwidthCurve curve_of(const ProbedWorkingSet& set, double ceiling_bytes_per_s);
+
+}  // namespace contactlab::tuner

@@ -1,0 +1,189 @@
+#include "contactlab/tuner/bandwidth_probe.hpp"
+
+#include <fmt/core.h>
+#include <omp.h>
+
+#include <algorithm>
+#include <chrono>
+#include <fstream>
+#include <memory>
+#include <stdexcept>
+
+#include "contactlab/kernels/error.hpp"
+#include "contactlab/support/json_reader.hpp"
+#include "contactlab/tuner/result_schema.hpp"
+
+namespace contactlab::tuner {
+
+namespace {
+
+constexpr std::uint64_t kTriadBytesPerElement = 3 * sizeof(double);  // STREAM's count
+
+// Arrays that are not value-initialised (std::vector would touch every page from one thread,
+// putting them all in that thread's memory on a NUMA machine).
+struct RawArray {
+  explicit RawArray(std::size_t n) : data(new double[n]) {}
+  std::unique_ptr<double[]> data;
+};
+
+double best_triad_bytes_per_s(double* a, const double* b, const double* c, std::size_t n,
+                              int threads, int repetitions) {
+  const double scalar = 3.0;
+  auto pass = [&] {
+    const auto start = std::chrono::steady_clock::now();
+#pragma omp parallel for schedule(static) num_threads(threads)
+    for (std::size_t i = 0; i < n; ++i) a[i] = b[i] + scalar * c[i];
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  };
+  pass();  // untimed: brings the arrays to this thread count's caches
+  double best = 0.0;
+  for (int r = 0; r < repetitions; ++r) {
+    const double seconds = pass();
+    if (seconds > 0.0)
+      best = std::max(best, static_cast<double>(n * kTriadBytesPerElement) / seconds);
+  }
+  return best;
+}
+
+}  // namespace
+
+void validate(const ProbeOptions& options) {
+  if (options.threads.empty()) throw InputError("probe: no thread count");
+  for (std::size_t i = 0; i < options.threads.size(); ++i) {
+    if (options.threads[i] < 1) throw InputError("probe: --threads: every count must be >= 1");
+    if (i > 0 && options.threads[i] <= options.threads[i - 1]) {
+      throw InputError("probe: --threads: counts must be ascending and distinct");
+    }
+  }
+  if (options.working_sets.empty()) throw InputError("probe: no working-set size");
+  for (std::size_t i = 0; i < options.working_sets.size(); ++i) {
+    if (options.working_sets[i] < 3 * 1024) {
+      throw InputError("probe: --sizes: every working set must be at least 3 KiB");
+    }
+    if (i > 0 && options.working_sets[i] <= options.working_sets[i - 1]) {
+      throw InputError("probe: --sizes: sizes must be ascending and distinct");
+    }
+  }
+  if (options.repetitions < 1) throw InputError("probe: --repetitions must be >= 1");
+}
+
+MachineProbe probe_bandwidth(const ProbeOptions& options) {
+  validate(options);
+  const int most = options.threads.back();
+  MachineProbe probe;
+  for (const std::uint64_t bytes : options.working_sets) {
+    const auto n = static_cast<std::size_t>(bytes / kTriadBytesPerElement);
+    RawArray a(n), b(n), c(n);
+    double* pa = a.data.get();
+    double* pb = b.data.get();
+    double* pc = c.data.get();
+#pragma omp parallel for schedule(static) num_threads(most)
+    for (std::size_t i = 0; i < n; ++i) {
+      pa[i] = 0.0;
+      pb[i] = 1.0;
+      pc[i] = 2.0;
+    }
+    ProbedWorkingSet set;
+    set.bytes = n * kTriadBytesPerElement;
+    for (const int t : options.threads) {
+      set.bytes_per_s.emplace_back(t,
+                                   best_triad_bytes_per_s(pa, pb, pc, n, t, options.repetitions));
+    }
+    probe.working_sets.push_back(std::move(set));
+  }
+  return probe;
+}
+
+nlohmann::json probe_document(const MachineProbe& probe, const ProbeOptions& options,
+                              const Context& context) {
+  nlohmann::json doc;
+  doc["schema_version"] = 1;
+  doc["kind"] = "contactlab-machine-probe";
+  doc["label"] = "measured";
+  doc["context"] = context;
+  doc["method"] = fmt::format(
+      "STREAM's triad a[i] = b[i] + 3 c[i] over three arrays of doubles, OpenMP static schedule, "
+      "the arrays first touched by {} threads with that schedule; per working set (the three "
+      "arrays together) and thread count one untimed pass, then the best of {} timed passes; "
+      "bytes counted as STREAM counts them (24 per element: two reads and a write, not the "
+      "write-allocate).",
+      options.threads.back(), options.repetitions);
+  nlohmann::json sets = nlohmann::json::array();
+  for (const ProbedWorkingSet& s : probe.working_sets) {
+    nlohmann::json points = nlohmann::json::array();
+    for (const auto& [threads, bytes_per_s] : s.bytes_per_s) {
+      points.push_back({{"threads", threads}, {"bytes_per_s", bytes_per_s}});
+    }
+    sets.push_back({{"bytes", s.bytes}, {"points", points}});
+  }
+  doc["working_sets"] = sets;
+  return doc;
+}
+
+MachineProbe read_machine_file(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw InputError("machine file " + path + ": cannot be read");
+  nlohmann::json doc;
+  try {
+    doc = nlohmann::json::parse(in);
+  } catch (const nlohmann::json::parse_error& e) {
+    throw InputError("machine file " + path + ": not JSON (" + e.what() + ")");
+  }
+  try {
+    const JsonIn root(doc, "$");
+    ObjectIn top(root);
+    int version = 0;
+    std::string kind, label, method;
+    top("schema_version", version);
+    top("kind", kind);
+    if (kind != "contactlab-machine-probe") {
+      top.field("kind").fail("expected \"contactlab-machine-probe\", got \"" + kind + "\"");
+    }
+    if (version != 1) top.field("schema_version").fail("this program reads version 1");
+    top("label", label);
+    top("method", method);
+    nlohmann::json context;
+    top("context", context);
+    MachineProbe probe;
+    const JsonIn sets = top.field("working_sets");
+    if (!sets.value().is_array() || sets.value().empty()) sets.fail("expected a non-empty array");
+    for (std::size_t i = 0; i < sets.value().size(); ++i) {
+      ObjectIn set(JsonIn(sets.value()[i], sets.path() + "[" + std::to_string(i) + "]"));
+      ProbedWorkingSet s;
+      set("bytes", s.bytes);
+      const JsonIn points = set.field("points");
+      if (!points.value().is_array() || points.value().empty()) {
+        points.fail("expected a non-empty array");
+      }
+      for (std::size_t j = 0; j < points.value().size(); ++j) {
+        ObjectIn point(JsonIn(points.value()[j], points.path() + "[" + std::to_string(j) + "]"));
+        int threads = 0;
+        double bytes_per_s = 0.0;
+        point("threads", threads);
+        point("bytes_per_s", bytes_per_s);
+        point.finish();
+        s.bytes_per_s.emplace_back(threads, bytes_per_s);
+      }
+      set.finish();
+      try {
+        BandwidthCurve check(s.bytes_per_s, 0.0);
+      } catch (const std::invalid_argument& e) {
+        points.fail(e.what());
+      }
+      if (!probe.working_sets.empty() && s.bytes <= probe.working_sets.back().bytes) {
+        set.field("bytes").fail("working sets must be ascending by bytes");
+      }
+      probe.working_sets.push_back(std::move(s));
+    }
+    top.finish();
+    return probe;
+  } catch (const SchemaError& e) {
+    throw InputError("machine file " + path + ": " + e.what());
+  }
+}
+
+BandwidthCurve curve_of(const ProbedWorkingSet& set, double ceiling_bytes_per_s) {
+  return BandwidthCurve(set.bytes_per_s, ceiling_bytes_per_s);
+}
+
+}  // namespace contactlab::tuner
