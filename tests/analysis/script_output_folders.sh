@@ -58,6 +58,8 @@ $py scripts/detect-compare "$B" "$B" --scene "s=$dir/s.bin:0.05" \
   --json "$dir/cmp/a/b/c.json" >"$dir/detect-compare-made.out" 2>&1 ||
   { echo "detect-compare failed:"; cat "$dir/detect-compare-made.out"; status=1; }
 [ -f "$dir/cmp/a/b/c.json" ] || { echo "detect-compare wrote no $dir/cmp/a/b/c.json"; status=1; }
+grep -q '"git_commit"' "$dir/cmp/a/b/c.json" 2>/dev/null ||
+  { echo "detect-compare recorded no build commit in $dir/cmp/a/b/c.json"; status=1; }
 # dem-isa-compare: the --json folder made, and a record naming the set each run's step ran on.
 "$B" dem run experiments/dem/drop-box.json --steps 20 --checkpoint "$dir/drop.chk" \
   >"$dir/drop.out" 2>&1 || { echo "dem run failed:"; cat "$dir/drop.out"; status=1; }
