@@ -57,7 +57,7 @@ void validate(const ProbeOptions& options) {
   }
   if (options.working_sets.empty()) throw InputError("probe: no working-set size");
   for (std::size_t i = 0; i < options.working_sets.size(); ++i) {
-    if (options.working_sets[i] < 3 * 1024) {
+    if (options.working_sets[i] < std::uint64_t{3} * 1024) {
       throw InputError("probe: --sizes: every working set must be at least 3 KiB");
     }
     if (i > 0 && options.working_sets[i] <= options.working_sets[i - 1]) {

@@ -50,7 +50,7 @@ TEST(BandwidthCurve, BadCurvesAreRefusedWithTheReason) {
   EXPECT_THROW(BandwidthCurve({{1, 0.0}}, 0.0), std::invalid_argument);
   EXPECT_THROW(BandwidthCurve({{1, kG}}, -1.0), std::invalid_argument);
   try {
-    BandwidthCurve({{1, kG}, {2, -kG}}, 0.0);
+    const BandwidthCurve curve({{1, kG}, {2, -kG}}, 0.0);
     FAIL();
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("at 2 threads"), std::string::npos) << e.what();
