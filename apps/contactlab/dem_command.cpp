@@ -91,9 +91,11 @@ class VariantTuning {
     if (first) {
       fmt::print(
           "variant auto: starts with {} (the model's best, {}, predicted {:+.1f} % faster "
-          "than {}; margin {:.1f} %)\n",
+          "than {}; margin {:.1f} %: the stated one or the calibration's spread, {:.1f} %, "
+          "whichever is larger)\n",
           dem::to_string(d.variant), dem::to_string(d.best), 100.0 * d.predicted_gain,
-          dem::to_string(engine.settings().force_variant), 100.0 * retuner_.margin());
+          dem::to_string(engine.settings().force_variant), 100.0 * retuner_.margin(),
+          100.0 * costs_.calibration_spread);
     }
     if (!first && !d.switched) return;
     engine.set_force_variant(d.variant);

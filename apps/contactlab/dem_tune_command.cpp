@@ -46,6 +46,7 @@ nlohmann::json costs_json(const dem::ForceCosts& c) {
   return {{"threads", c.threads},
           {"runs", c.calibration_runs},
           {"steps_per_run", c.calibration_steps},
+          {"spread", c.calibration_spread},
           {"seconds", c.calibration_seconds},
           {"seconds_per_pair", per_pair},
           {"seconds_per_foreign_j_side", foreign},

@@ -322,7 +322,7 @@ TEST(DemCli, TuneDemRunsModelSearchAndExhaustive) {
       run_command(contactlab_exe() + " tune --dem " + config_path() +
                   " --threads 2 --dem-steps 5 --exhaustive --verify-rounds 2 --json " + report);
   EXPECT_EQ(r.exit_code, 0) << r.output;
-  for (const char* line : {"calibrated by 10 runs", "model ", "search ", "exhaustive ", "default ",
+  for (const char* line : {"calibrated by 12 runs", "model ", "search ", "exhaustive ", "default ",
                            "report's ", "chosen", "model err"}) {
     EXPECT_NE(r.output.find(line), std::string::npos) << line << "\n" << r.output;
   }
@@ -355,7 +355,7 @@ TEST(DemCli, RunRetunesAtRebuildsAndLogsTheVariants) {
   const std::string log = dir.file("variants.csv");
   const auto r = run_retuned("--steps 300", log);
   EXPECT_EQ(r.exit_code, 0) << r.output;
-  EXPECT_NE(r.output.find("variant auto: force model calibrated by 10 runs"), std::string::npos)
+  EXPECT_NE(r.output.find("variant auto: force model calibrated by 12 runs"), std::string::npos)
       << r.output;
   EXPECT_NE(r.output.find("variant auto: starts with"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("variants ran"), std::string::npos) << r.output;

@@ -119,15 +119,16 @@ TEST(DemForceModel, CalibrationFitsEveryTermWithTheStatedRuns) {
     return bed_engine(v, threads, 1500);
   };
   const ForceCosts one = calibrate_force_costs(make, 1, 5);
-  EXPECT_EQ(one.calibration_runs, 7);
+  EXPECT_EQ(one.calibration_runs, 9);  // seven structures, the ordered pass twice more
   const ForceCosts two = calibrate_force_costs(make, 2, 5);
-  EXPECT_EQ(two.calibration_runs, 10);
+  EXPECT_EQ(two.calibration_runs, 12);
   for (const ForceCosts* c : {&one, &two}) {
     for (int a = 0; a < 4; ++a) {
       EXPECT_GT(c->per_pair[a], 0.0) << a;
       EXPECT_GE(c->per_foreign_j_side[a], 0.0) << a;
     }
     EXPECT_GT(c->per_particle_update, 0.0);
+    EXPECT_GE(c->calibration_spread, 0.0);
     EXPECT_GE(c->per_grab, 0.0);
     EXPECT_GE(c->per_particle_arrays, 0.0);
   }
@@ -153,6 +154,34 @@ TEST(DemForceModel, RetunerSwitchesOnlyPastItsMargin) {
   EXPECT_FALSE(kept.switched);
   EXPECT_EQ(kept.variant, ForceVariant{});
   EXPECT_EQ(kept.best, parse_force_variant("full-list/static")) << "the best is named when kept";
+}
+
+TEST(DemForceModel, RetunerKeepsTheVariantWhenTheCalibrationsSpreadExceedsTheGain) {
+  const auto engine = bed_engine(ForceVariant{}, 2, 600);
+  ForceCosts c;
+  c.per_pair[0] = 1.0;
+  c.per_pair[1] = 1.0;
+  c.per_pair[2] = 1.0;
+  c.per_pair[3] = 0.45;  // two sides at 0.45: the full list a little cheaper, a gain of some %
+  c.per_particle_update = 1.0;
+  const std::vector<ForceVariant> candidates{ForceVariant{},
+                                             parse_force_variant("full-list/static")};
+  const double gain =
+      ForceRetuner(c, candidates, 0.0).decide(*engine, ForceVariant{}).predicted_gain;
+  ASSERT_GT(gain, 0.0);
+  // The calibration's runs spread by more than the predicted gain: the current variant stays,
+  // whatever the stated margin; with a spread below it, the stated margin rules.
+  c.calibration_spread = 2.0 * gain;
+  const ForceRetuner noisy(c, candidates, 0.0);
+  EXPECT_DOUBLE_EQ(noisy.margin(), 2.0 * gain);
+  const ForceRetuner::Decision kept = noisy.decide(*engine, ForceVariant{});
+  EXPECT_FALSE(kept.switched);
+  EXPECT_EQ(kept.variant, ForceVariant{});
+  c.calibration_spread = 0.5 * gain;
+  const ForceRetuner quiet(c, candidates, 0.0);
+  EXPECT_DOUBLE_EQ(quiet.margin(), 0.5 * gain);
+  EXPECT_TRUE(quiet.decide(*engine, ForceVariant{}).switched);
+  EXPECT_DOUBLE_EQ(ForceRetuner(c, candidates, 0.9).margin(), 0.9) << "a larger stated margin";
 }
 
 }  // namespace

@@ -196,6 +196,15 @@ ForceCosts calibrate_force_costs(const EngineFactory& make_engine, int threads,
   const Timed serial = time("ordered/static/walls=serial");
   c.per_particle_serial_walls = safe(serial.per_step.walls_s, n);
 
+  // The ordered pass twice more, apart from its first run: the calibration's own spread.
+  {
+    auto pass_s = [](const Timed& r) { return r.per_step.pair_forces_s + r.per_step.update_s; };
+    std::vector<double> passes{pass_s(ordered), pass_s(time("ordered/static")),
+                               pass_s(time("ordered/static"))};
+    std::sort(passes.begin(), passes.end());
+    c.calibration_spread = passes[1] > 0 ? (passes[2] - passes[0]) / passes[1] : 0.0;
+  }
+
   // The schedules' own costs, from the pass's time over all threads: the pairs' cost plus G
   // grabs and X foreign j sides (counted on the schedule's replay): G g + X x = T pass - P p.
   // static,1 has no grabs (x alone); dynamic,1 then gives g.

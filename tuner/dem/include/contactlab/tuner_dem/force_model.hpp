@@ -9,6 +9,7 @@
 // re-prices every variant at each neighbour-list rebuild and switches when the gain is worth it.
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <functional>
 #include <memory>
@@ -51,6 +52,9 @@ struct ForceCosts {
   double per_particle_arrays = 0.0;        // per-thread: zeroing and summing the arrays
   double per_grab = 0.0;                   // dynamic/guided: one chunk from the shared counter
   int calibration_runs = 0;
+  // The calibration's own noise: the ordered pass (pair forces and update per step) timed three
+  // times, (largest - smallest) / median. A predicted gain below it cannot be told from noise.
+  double calibration_spread = 0.0;
   std::uint64_t calibration_steps = 0;  // timed steps per calibration run
   double calibration_seconds = 0.0;
 };
@@ -86,12 +90,16 @@ std::vector<RankedVariant> rank_force_variants(const ForceLoopWork& work,
 
 // `dem run --retune`: at each neighbour-list rebuild the candidates are priced on the new list
 // (no timed run) and the variant switched when the best is predicted faster than the current
-// one by more than `margin` (a fraction): switching has no cost, but a prediction's noise
+// one by more than the margin: the stated `margin` (a fraction), raised to the calibration's
+// own measured spread where that is larger (a gain the calibration cannot tell from its noise
+// is no reason to leave the current variant). Switching has no cost, but a prediction's noise
 // should not flip the variant back and forth.
 class ForceRetuner {
  public:
   ForceRetuner(ForceCosts costs, std::vector<ForceVariant> candidates, double margin)
-      : costs_(costs), candidates_(std::move(candidates)), margin_(margin) {}
+      : costs_(costs),
+        candidates_(std::move(candidates)),
+        margin_(std::max(margin, costs.calibration_spread)) {}
   struct Decision {
     ForceVariant variant;         // the one to run: the best, or the current one
     ForceVariant best;            // the fastest predicted
