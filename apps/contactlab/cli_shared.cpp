@@ -76,6 +76,24 @@ std::vector<std::string> split_list(const std::string& text) {
   return items;
 }
 
+std::vector<int> int_list(const std::string& text, const char* option) {
+  std::vector<int> values;
+  for (const std::string& item : split_list(text)) {
+    std::size_t used = 0;
+    int value = 0;
+    try {
+      value = std::stoi(item, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (used != item.size() || value < 1) {
+      throw InputError(fmt::format("{}: '{}' is not a whole number >= 1", option, item));
+    }
+    values.push_back(value);
+  }
+  return values;
+}
+
 namespace {
 
 std::string percent(const std::optional<double>& value) {

@@ -86,6 +86,9 @@ struct SceneOptions {
 
 // "a,b,c" -> {"a", "b", "c"}; throws InputError on an empty item.
 std::vector<std::string> split_list(const std::string& text);
+// "1,2,4" -> {1, 2, 4}; throws InputError naming `option` on an item that is not a whole
+// number >= 1.
+std::vector<int> int_list(const std::string& text, const char* option);
 
 void print_counters(const tuner::CounterRecord& counters);
 

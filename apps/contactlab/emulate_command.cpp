@@ -26,24 +26,6 @@ namespace {
 
 namespace tn = contactlab::tuner;
 
-std::vector<int> int_list(const std::string& text, const char* option) {
-  std::vector<int> values;
-  for (const std::string& item : split_list(text)) {
-    std::size_t used = 0;
-    int value = 0;
-    try {
-      value = std::stoi(item, &used);
-    } catch (const std::exception&) {
-      used = 0;
-    }
-    if (used != item.size() || value < 1) {
-      throw InputError(fmt::format("{}: '{}' is not a whole number >= 1", option, item));
-    }
-    values.push_back(value);
-  }
-  return values;
-}
-
 void write_json(const std::string& path, const nlohmann::json& doc) {
   write_file_atomically(path, [&](std::ostream& out) { out << doc.dump(2) << '\n'; });
   fmt::print("wrote {}\n", path);

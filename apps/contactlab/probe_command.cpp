@@ -55,19 +55,7 @@ struct ProbeCommand {
     if (threads_.empty()) {
       for (int t = 1; t <= omp_get_num_procs(); ++t) options.threads.push_back(t);
     } else {
-      for (const std::string& item : split_list(threads_)) {
-        std::size_t used = 0;
-        int value = 0;
-        try {
-          value = std::stoi(item, &used);
-        } catch (const std::exception&) {
-          used = 0;
-        }
-        if (used != item.size() || value < 1) {
-          throw InputError(fmt::format("--threads: '{}' is not a whole number >= 1", item));
-        }
-        options.threads.push_back(value);
-      }
+      options.threads = int_list(threads_, "--threads");
     }
     options.working_sets.clear();
     for (const std::string& item : split_list(sizes_))
