@@ -166,7 +166,8 @@ CellGrid ContactDetector::prepare(const Scene& scene, const DetectOptions& optio
 
   run.threads = resolve_threads(options.threads);
   const Order order = options.variant.order;
-  const CellGrid grid(scene.box, (diameters ? scene.max_diameter() : options.diameter) + skin,
+  const double width = (diameters ? scene.max_diameter() : options.diameter) + skin;
+  const CellGrid grid(scene.box, std::max(width, options.min_cell_width),
                       order == Order::kMorton ? CellNumbering::kMorton : CellNumbering::kLinear);
   run.grid_dims = grid.dims();
 

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
+#include <limits>
 #include <string>
 
 #include "contactlab/kernels/error.hpp"
@@ -92,37 +93,35 @@ void radix_sort(std::vector<std::uint64_t>& keys, std::vector<std::uint32_t>& pa
   }
 }
 
-namespace {
-
-// The pair key from lower to higher stable id, and the sign that turns a spring seen from i
-// into one seen from the lower id.
-std::uint64_t pair_key(std::uint32_t a, std::uint32_t b) {
+std::uint64_t spring_key(std::uint32_t a, std::uint32_t b) {
   return a < b ? (std::uint64_t{a} << 32 | b) : (std::uint64_t{b} << 32 | a);
 }
 
-}  // namespace
-
-RebuildStats NeighborBuilder::rebuild(Particles& p, PairList& pairs, const Domain& domain,
-                                      double skin, bool rolling, int threads) {
-  const std::size_t n = p.size();
-  RebuildStats stats;
-  // 1. The touching pairs' springs, keyed by stable ids (oriented from the lower id).
-  old_keys_.clear();
-  old_payload_.clear();
-  old_spring_.clear();
+void collect_springs(const Particles& p, const PairList& pairs, CarriedSprings& out) {
+  out.clear();
   for (std::size_t k = 0; k < pairs.size(); ++k) {
     if (pairs.hx[k] == 0.0 && pairs.hy[k] == 0.0 && pairs.hz[k] == 0.0) continue;
     const std::uint32_t a = p.id[pairs.i[k]], b = p.id[pairs.j[k]];
-    const double sign = a < b ? 1.0 : -1.0;
-    old_keys_.push_back(pair_key(a, b));
-    old_payload_.push_back(static_cast<std::uint32_t>(old_spring_.size() / 3));
-    old_spring_.insert(old_spring_.end(),
-                       {sign * pairs.hx[k], sign * pairs.hy[k], sign * pairs.hz[k]});
+    const double sign = a < b ? 1.0 : -1.0;  // seen from i: turned to the lower id's view
+    out.add(spring_key(a, b), sign * pairs.hx[k], sign * pairs.hy[k], sign * pairs.hz[k]);
+  }
+}
+
+RebuildStats NeighborBuilder::rebuild(Particles& p, PairList& pairs, const Domain& domain,
+                                      double skin, bool rolling, int threads, RankAgreement* ranks,
+                                      CarriedSprings* carried) {
+  const std::size_t n = p.size();
+  RebuildStats stats;
+  // 1. The touching pairs' springs, keyed by stable ids (oriented from the lower id).
+  if (carried == nullptr) {
+    collect_springs(p, pairs, old_springs_);
+    carried = &old_springs_;
   }
 
   // 2. Wrap periodic positions, and add ghosts: images within reach of a periodic face.
   double max_r = 0.0;
   for (double r : p.radius) max_r = std::max(max_r, r);
+  if (ranks != nullptr) max_r = ranks->max_over_ranks(max_r);
   const double reach = 2.0 * max_r + skin;
   for (int a = 0; a < 3; ++a) {
     if (!domain.periodic[a]) continue;
@@ -150,16 +149,34 @@ RebuildStats NeighborBuilder::rebuild(Particles& p, PairList& pairs, const Domai
       pairs.shift[code][a] = (im - 1) * s[a];
     }
   }
-  scene_.x.assign(p.x.begin(), p.x.end());
-  scene_.y.assign(p.y.begin(), p.y.end());
-  scene_.z.assign(p.z.begin(), p.z.end());
+  // The scene's rows in stable-id order (by_id_[row] = particle), so that the cell order's
+  // ties and every row's partners follow the ids, not the order the particles came in.
+  by_id_.resize(n);
+  new_keys_.resize(n);
+  std::uint32_t max_id = 0;
+  for (std::size_t k = 0; k < n; ++k) {
+    new_keys_[k] = p.id[k];
+    by_id_[k] = static_cast<std::uint32_t>(k);
+    max_id = std::max(max_id, p.id[k]);
+  }
+  radix_sort(new_keys_, by_id_, std::max(1, static_cast<int>(std::bit_width(max_id))),
+             scratch_keys_, scratch_payload_);
+  scene_.x.resize(n);
+  scene_.y.resize(n);
+  scene_.z.resize(n);
   scene_.diameter.resize(n);
-  for (std::size_t k = 0; k < n; ++k) scene_.diameter[k] = 2.0 * p.radius[k];
+  for (std::size_t r = 0; r < n; ++r) {
+    const std::uint32_t k = by_id_[r];
+    scene_.x[r] = p.x[k];
+    scene_.y[r] = p.y[k];
+    scene_.z[r] = p.z[k];
+    scene_.diameter[r] = 2.0 * p.radius[k];
+  }
   ghost_owner_.clear();
   ghost_image_.clear();
   const bool any_periodic = domain.periodic[0] || domain.periodic[1] || domain.periodic[2];
-  for (std::size_t k = 0; any_periodic && k < n; ++k) {
-    const double pos[3] = {p.x[k], p.y[k], p.z[k]};
+  for (std::size_t r = 0; any_periodic && r < n; ++r) {
+    const double pos[3] = {scene_.x[r], scene_.y[r], scene_.z[r]};
     int options[3][2];  // per axis: the images to try (0 = none)
     int counts[3];
     for (int a = 0; a < 3; ++a) {
@@ -179,8 +196,8 @@ RebuildStats NeighborBuilder::rebuild(Particles& p, PairList& pairs, const Domai
           scene_.x.push_back(pos[0] + ix * domain.length(0));
           scene_.y.push_back(pos[1] + iy * domain.length(1));
           scene_.z.push_back(pos[2] + iz * domain.length(2));
-          scene_.diameter.push_back(2.0 * p.radius[k]);
-          ghost_owner_.push_back(static_cast<std::uint32_t>(k));
+          scene_.diameter.push_back(scene_.diameter[r]);
+          ghost_owner_.push_back(static_cast<std::uint32_t>(r));
           ghost_image_.push_back(static_cast<std::uint8_t>((ix + 1) + 3 * (iy + 1) + 9 * (iz + 1)));
         }
       }
@@ -190,9 +207,17 @@ RebuildStats NeighborBuilder::rebuild(Particles& p, PairList& pairs, const Domai
   Box box;
   for (int a = 0; a < 3; ++a) {
     const std::vector<double>& c = a == 0 ? scene_.x : a == 1 ? scene_.y : scene_.z;
-    const auto [mn, mx] = std::minmax_element(c.begin(), c.end());
-    box.lo[a] = *mn - reach;
-    box.hi[a] = *mx + reach;
+    box.lo[a] = std::numeric_limits<double>::infinity();
+    box.hi[a] = -std::numeric_limits<double>::infinity();
+    for (const double v : c) {
+      box.lo[a] = std::min(box.lo[a], v);
+      box.hi[a] = std::max(box.hi[a], v);
+    }
+  }
+  if (ranks != nullptr) box = ranks->box_over_ranks(box);
+  for (int a = 0; a < 3; ++a) {
+    box.lo[a] -= reach;
+    box.hi[a] += reach;
   }
   scene_.box = box;
 
@@ -202,23 +227,28 @@ RebuildStats NeighborBuilder::rebuild(Particles& p, PairList& pairs, const Domai
   //    (and the new order) does not depend on the threads.
   DetectOptions options{parse_variant("particle/sorted/full/static"), 0.0, threads, nullptr};
   options.homes = HomeRange{0, static_cast<std::uint32_t>(n)};
+  options.min_cell_width = reach;
   const ContactList list = detector_.neighbor_list(scene_, options, skin);
 
-  // 4. The new order: owned particles in cell (slot) order.
-  order_.clear();
+  // 4. The new order: the particles' rows in cell (slot) order.
+  row_order_.clear();
   for (std::uint32_t input : detector_.working_to_input()) {
-    if (input < n) order_.push_back(input);
+    if (input < n) row_order_.push_back(input);
   }
-  new_index_.resize(n);
-  for (std::size_t a = 0; a < n; ++a) new_index_[order_[a]] = static_cast<std::uint32_t>(a);
+  order_.resize(n);
+  new_index_.resize(n);  // by scene row
+  for (std::size_t a = 0; a < n; ++a) {
+    order_[a] = by_id_[row_order_[a]];
+    new_index_[row_order_[a]] = static_cast<std::uint32_t>(a);
+  }
   p.permute(order_);
 
   pairs.i.clear();
   pairs.j.clear();
   pairs.image.clear();
   for (std::size_t a = 0; a < n; ++a) {
-    const std::uint32_t old = order_[a];
-    for (std::uint32_t q : list.partners_of(old)) {
+    const std::uint32_t row = row_order_[a];
+    for (std::uint32_t q : list.partners_of(row)) {
       if (q < n) {
         pairs.i.push_back(static_cast<std::uint32_t>(a));
         pairs.j.push_back(new_index_[q]);
@@ -226,7 +256,7 @@ RebuildStats NeighborBuilder::rebuild(Particles& p, PairList& pairs, const Domai
         continue;
       }
       const std::uint32_t owner = ghost_owner_[q - n];
-      if (owner <= old) continue;  // each periodic pair once, from its lower input row
+      if (owner <= row) continue;  // each periodic pair once, from its lower row
       pairs.i.push_back(static_cast<std::uint32_t>(a));
       pairs.j.push_back(new_index_[owner]);
       pairs.image.push_back(ghost_image_[q - n]);
@@ -239,34 +269,38 @@ RebuildStats NeighborBuilder::rebuild(Particles& p, PairList& pairs, const Domai
   std::fill(pairs.hz.begin(), pairs.hz.end(), 0.0);
   stats.pairs = count;
 
-  // 5. Merge the old springs into the new list by sorted keys: O(pairs) radix sorts.
-  if (!old_keys_.empty()) {
+  // 5. Merge the carried springs into the new list by sorted keys: O(pairs) radix sorts.
+  if (carried->size() > 0) {
+    std::vector<std::uint64_t>& old_keys = carried->keys;
+    old_payload_.resize(old_keys.size());
+    for (std::size_t k = 0; k < old_keys.size(); ++k) {
+      old_payload_[k] = static_cast<std::uint32_t>(k);
+      max_id = std::max<std::uint32_t>(max_id, static_cast<std::uint32_t>(old_keys[k]));
+    }
     new_keys_.resize(count);
     new_payload_.resize(count);
     for (std::size_t k = 0; k < count; ++k) {
-      new_keys_[k] = pair_key(p.id[pairs.i[k]], p.id[pairs.j[k]]);
+      new_keys_[k] = spring_key(p.id[pairs.i[k]], p.id[pairs.j[k]]);
       new_payload_[k] = static_cast<std::uint32_t>(k);
     }
-    std::uint32_t max_id = 0;
-    for (std::uint32_t v : p.id) max_id = std::max(max_id, v);
     const int id_bits = std::max(1, static_cast<int>(std::bit_width(max_id)));
     // Keys are lo << 32 | hi: sort the low id_bits of each half (two rounds over the key).
     auto sort_keys = [&](std::vector<std::uint64_t>& keys, std::vector<std::uint32_t>& payload) {
       for (auto& key : keys) key = (key >> 32) << id_bits | (key & 0xffffffffu);
       radix_sort(keys, payload, 2 * id_bits, scratch_keys_, scratch_payload_);
     };
-    sort_keys(old_keys_, old_payload_);
+    sort_keys(old_keys, old_payload_);
     sort_keys(new_keys_, new_payload_);
     std::size_t a = 0;
-    for (std::size_t b = 0; a < old_keys_.size() && b < count;) {
-      if (old_keys_[a] < new_keys_[b]) {
+    for (std::size_t b = 0; a < old_keys.size() && b < count;) {
+      if (old_keys[a] < new_keys_[b]) {
         ++a;
-      } else if (new_keys_[b] < old_keys_[a]) {
+      } else if (new_keys_[b] < old_keys[a]) {
         ++b;
       } else {
         const std::uint32_t k = new_payload_[b];
         const double sign = p.id[pairs.i[k]] < p.id[pairs.j[k]] ? 1.0 : -1.0;
-        const double* s = &old_spring_[3 * std::size_t{old_payload_[a]}];
+        const double* s = &carried->springs[3 * std::size_t{old_payload_[a]}];
         pairs.hx[k] = sign * s[0];
         pairs.hy[k] = sign * s[1];
         pairs.hz[k] = sign * s[2];

@@ -121,6 +121,9 @@ struct DetectOptions {
   DetectionObserver* observer = nullptr;
   HomeRange homes{};    // default: every particle is owned
   HomeBlocks blocks{};  // default: every iteration of the loop is this process's
+  // Cells at least this wide [m] (0: the largest diameter or D, plus skin): processes that hold
+  // parts of one scene build the grid one process would.
+  double min_cell_width = 0.0;
 };
 
 struct DetectRun {

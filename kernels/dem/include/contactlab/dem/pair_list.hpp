@@ -1,6 +1,7 @@
 // The DEM half neighbour list (pairs within r_i + r_j + skin, each once) with the contact
 // history aligned to it, rebuilt from the shared cell traversal (ContactDetector::neighbor_list)
-// with periodic images, particles reordered by cell, history carried by a sorted-key merge.
+// with periodic images, particles reordered by cell (ties by stable id), history carried by a
+// sorted-key merge.
 #pragma once
 
 #include <array>
@@ -57,28 +58,64 @@ struct PairList {
   void build_csr(std::size_t particles);
 };
 
+// Tangential springs by stable-id pair, key = lower id << 32 | higher id, each spring seen from
+// the lower id: what a rebuild carries from the old list to the new one, and what a decomposed
+// run sends along with the particles that change process.
+struct CarriedSprings {
+  std::vector<std::uint64_t> keys;
+  std::vector<double> springs;  // 3 per key, in key order of insertion
+  std::size_t size() const { return keys.size(); }
+  void clear() {
+    keys.clear();
+    springs.clear();
+  }
+  void add(std::uint64_t key, double sx, double sy, double sz) {
+    keys.push_back(key);
+    springs.insert(springs.end(), {sx, sy, sz});
+  }
+};
+std::uint64_t spring_key(std::uint32_t id_a, std::uint32_t id_b);
+// The springs of the list's touching pairs (a non-zero spring).
+void collect_springs(const Particles& particles, const PairList& pairs, CarriedSprings& out);
+
+// What the processes of a decomposed run agree on during a rebuild, so that each builds its
+// particles' list on the grid one process would use (the same cells, hence the same order and
+// sums): the largest radius, and the box of every process's particles and periodic images.
+// One process passes none.
+class RankAgreement {
+ public:
+  virtual ~RankAgreement() = default;
+  virtual double max_over_ranks(double local) = 0;
+  virtual Box box_over_ranks(const Box& local) = 0;
+};
+
 struct RebuildStats {
   std::size_t pairs = 0, carried_contacts = 0, ghosts = 0;
 };
 
 class NeighborBuilder {
  public:
-  // Reorders `particles` by cell, rebuilds `pairs` for `skin` [m] and carries every non-zero
-  // tangential spring (pair and wall) to the new list. Periodic positions are wrapped into
-  // the domain first. The candidate search runs on `threads` threads; the result is the same
-  // for any count. Throws InputError if a periodic length is under 3 pair reaches.
+  // Reorders `particles` by cell (within a cell by stable id), rebuilds `pairs` for `skin` [m]
+  // and carries every non-zero tangential spring (pair and wall) to the new list. Periodic
+  // positions are wrapped into the domain first. The candidate search runs on `threads`
+  // threads; the result is the same for any count. The order and every row depend only on the
+  // particles' ids, positions and the grid: a process holding a subset of them (and the same
+  // grid, through `ranks`) gets the one-process order restricted to its particles. With
+  // `carried`, its springs are carried instead of the old list's (whose indices may no longer
+  // match the particles). Throws InputError if a periodic length is under 3 pair reaches.
   RebuildStats rebuild(Particles& particles, PairList& pairs, const Domain& domain, double skin,
-                       bool rolling, int threads = 1);
+                       bool rolling, int threads = 1, RankAgreement* ranks = nullptr,
+                       CarriedSprings* carried = nullptr);
 
  private:
   ContactDetector detector_;
   Scene scene_;
   std::vector<std::uint32_t> ghost_owner_;
   std::vector<std::uint8_t> ghost_image_;
-  std::vector<std::uint32_t> order_, new_index_;
-  std::vector<std::uint64_t> old_keys_, new_keys_, scratch_keys_;
+  std::vector<std::uint32_t> by_id_, row_order_, order_, new_index_;
+  std::vector<std::uint64_t> new_keys_, scratch_keys_;
   std::vector<std::uint32_t> old_payload_, new_payload_, scratch_payload_;
-  std::vector<double> old_spring_;
+  CarriedSprings old_springs_;
 };
 
 // LSD radix sort of keys < 2^bits with their payloads (stable): O(n) per 11-bit digit.
