@@ -30,17 +30,23 @@ void Engine::drift_on<StepIsa::kAvx2>(double& max_disp_sq, std::uint32_t& bad);
 template <>
 void Engine::drift_on<StepIsa::kAvx512>(double& max_disp_sq, std::uint32_t& bad);
 
-Engine::Engine(EngineSettings settings, Particles particles)
+Engine::Engine(EngineSettings settings, Particles particles, Halo* halo)
     : settings_(std::move(settings)),
+      halo_(halo),
       coefficients_(pair_coefficients(settings_.law)),
       particles_(std::move(particles)) {
   Particles& p = particles_;
   const std::size_t n = p.size();
-  if (n == 0) throw InputError("no particles");
+  if (n == 0 && halo_ == nullptr) throw InputError("no particles");
   double max_d = 0.0, min_m = std::numeric_limits<double>::infinity();
   for (std::size_t k = 0; k < n; ++k) {
     max_d = std::max(max_d, 2.0 * p.radius[k]);
     min_m = std::min(min_m, p.mass[k]);
+  }
+  if (halo_ != nullptr) {  // every process decides on the run's extremes
+    max_d = halo_->max_over_ranks(max_d);
+    min_m = -halo_->max_over_ranks(-min_m);
+    if (max_d == 0.0) throw InputError("no particles");
   }
   if (settings_.skin <= 0.0) settings_.skin = 0.1 * max_d;
   // The stiffest contact: two of the lightest particles (m* = m/2) or one on a wall (m* = m);
@@ -84,7 +90,7 @@ Engine::Engine(EngineSettings settings, Particles particles)
   }
   refresh_kinematics(0.0);  // the first forces see the initial velocities
   compute_forces(false);
-  const Energies e = energies();
+  const Energies e = local_energies();  // with a halo, this process's share
   initial_energy_ = e.kinetic + e.potential;
 }
 
@@ -189,13 +195,26 @@ void Engine::index_wall_reach() {
 }
 
 void Engine::rebuild() {
+  // With a halo: the ghosts leave before the sink (it counts owned particles only), and the
+  // migrants and new ghosts arrive after it, their springs carried along.
+  if (halo_ != nullptr) halo_->drop_ghosts(particles_, pairs_, carried_);
   remove_sunk_particles();  // sink.cpp: removals happen at rebuilds only
-  if (!particles_.id.empty()) {
+  if (halo_ != nullptr) {
+    halo_->exchange_particles(particles_, carried_);
+    builder_.rebuild(particles_, pairs_, settings_.domain, settings_.skin,
+                     coefficients_.mu_roll > 0, settings_.threads, halo_, &carried_);
+  } else if (!particles_.id.empty()) {
     builder_.rebuild(particles_, pairs_, settings_.domain, settings_.skin,
                      coefficients_.mu_roll > 0, settings_.threads);
   }
   ++rebuilds_;
   index_ids();
+  run_particles_ = particles_.size();
+  if (halo_ != nullptr) {
+    halo_->index_ghosts(particles_);
+    run_particles_ = static_cast<std::uint64_t>(
+        std::llround(halo_->sum_over_ranks(static_cast<double>(halo_->owned_count()))));
+  }
   refresh_kinematics(prediction_kick());
 }
 
@@ -213,8 +232,10 @@ std::uint64_t Engine::run_steps(std::uint64_t steps, BatchEnd end) {
   const bool at_rebuild = end == BatchEnd::kAtRebuild;
   std::uint64_t done = 0;
   while (done < steps) {
-    if (done > 0 && particles_.size() == 0) break;  // the sink took every particle
-    const bool rebuilt = advance(done + 1 < steps, at_rebuild);
+    if (done > 0 && run_particles_ == 0) break;  // the sink took every particle
+    // A finish drifts the next step only where no ghost is exchanged in between.
+    const bool rebuilt =
+        advance(done + 1 < steps && (halo_ == nullptr || !halo_->exchanges_ghosts()), at_rebuild);
     ++done;
     if (rebuilt && at_rebuild) break;
   }
@@ -229,7 +250,7 @@ bool Engine::advance(bool drift_next, bool end_at_rebuild) {
   double t0 = omp_get_wtime();
   double max_disp_sq = 0.0;
   std::uint32_t bad = UINT32_MAX;  // the first particle that moved too far or is not finite
-  particle_steps_ += n;
+  particle_steps_ += halo_ != nullptr ? halo_->owned_count() : n;
   if (drifted_) {  // the last finish drifted this step already
     drifted_ = false;
     max_disp_sq = drifted_disp_sq_;
@@ -252,6 +273,8 @@ bool Engine::advance(bool drift_next, bool end_at_rebuild) {
                           : std::string("position or velocity is not finite (NaN)"),
          bad);
   }
+  // Every process rebuilds at the same step: the largest move over all of them decides.
+  if (halo_ != nullptr) max_disp_sq = halo_->max_over_ranks(max_disp_sq);
   const bool rebuilds = max_disp_sq > move_limit_sq;
   if (rebuilds) {
     rebuild();
@@ -290,6 +313,7 @@ void Engine::compute_forces(bool final_kick, bool drift_next) {
                                       &Engine::compute_forces_on<StepIsa::kAvx512>};
   const std::uint64_t large_before = large_overlaps_;
   (this->*kPasses[static_cast<std::size_t>(step_isa_)])(final_kick, drift_next);
+  if (halo_ != nullptr) halo_->refresh_ghosts(particles_);
   const std::uint64_t large = large_overlaps_ - large_before;
   if (large > 0 && !warned_ && settings_.warn_large_overlaps) {
     warned_ = true;

@@ -6,11 +6,24 @@
 namespace contactlab::dem {
 
 Energies Engine::energies() const {
+  Energies e = local_energies();
+  double initial = initial_energy_;
+  if (halo_ != nullptr) {  // each process's initial energy less what its sink took
+    e.kinetic = halo_->sum_over_ranks(e.kinetic);
+    e.potential = halo_->sum_over_ranks(e.potential);
+    initial = halo_->sum_over_ranks(initial);
+  }
+  e.dissipated = initial - (e.kinetic + e.potential);
+  return e;
+}
+
+Energies Engine::local_energies() const {
   const Particles& p = particles_;
   const PairCoefficients& c = coefficients_;
   Energies e;
   double elastic = 0.0;
   for (std::size_t a = 0; a < p.size(); ++a) {
+    if (halo_ != nullptr && halo_->is_ghost(a)) continue;  // its owner counts it
     e.kinetic += 0.5 * p.mass[a] * (p.vx[a] * p.vx[a] + p.vy[a] * p.vy[a] + p.vz[a] * p.vz[a]);
     e.kinetic +=
         0.5 / p.inv_inertia[a] * (p.wx[a] * p.wx[a] + p.wy[a] * p.wy[a] + p.wz[a] * p.wz[a]);
@@ -38,10 +51,14 @@ Energies Engine::energies() const {
     if (delta <= 0) continue;
     const double kn = c.k_n(q.m_star[k]);
     const double h2 = q.hx[k] * q.hx[k] + q.hy[k] * q.hy[k] + q.hz[k] * q.hz[k];
-    elastic += 0.5 * kn * delta * delta + 0.5 * c.kt_ratio * kn * h2;
+    // With a halo, a pair is every process's that holds one of its particles: each counts its
+    // own particles' halves.
+    const double share = halo_ == nullptr
+                             ? 1.0
+                             : 0.5 * ((halo_->is_ghost(i) ? 0.0 : 1.0) + (halo_->is_ghost(j) ? 0.0 : 1.0));
+    elastic += share * (0.5 * kn * delta * delta + 0.5 * c.kt_ratio * kn * h2);
   }
   e.potential += elastic;
-  e.dissipated = initial_energy_ - (e.kinetic + e.potential);
   return e;
 }
 

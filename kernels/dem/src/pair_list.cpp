@@ -225,7 +225,10 @@ RebuildStats NeighborBuilder::rebuild(Particles& p, PairList& pairs, const Domai
   //    particle loop with the full stencil gives each particle's row from one thread in the
   //    stencil's order, and the registration is the same for any thread count, so the list
   //    (and the new order) does not depend on the threads.
-  DetectOptions options{parse_variant("particle/sorted/full/static"), 0.0, threads, nullptr};
+  // (The diameter counts only for a process left without particles: a scene without any has
+  // no per-particle diameters.)
+  DetectOptions options{parse_variant("particle/sorted/full/static"), 2.0 * max_r, threads,
+                        nullptr};
   options.homes = HomeRange{0, static_cast<std::uint32_t>(n)};
   options.min_cell_width = reach;
   const ContactList list = detector_.neighbor_list(scene_, options, skin);

@@ -12,6 +12,7 @@
 
 #include "contactlab/dem/contact_law.hpp"
 #include "contactlab/dem/force_variant.hpp"
+#include "contactlab/dem/halo.hpp"
 #include "contactlab/dem/pair_list.hpp"
 #include "contactlab/dem/particles.hpp"
 #include "contactlab/dem/walls.hpp"
@@ -106,7 +107,10 @@ class Engine {
  public:
   // Checks dt against the stable limit (InputError stating it), builds the neighbour list,
   // refuses initial overlaps beyond the tolerance and computes the initial forces.
-  Engine(EngineSettings settings, Particles particles);
+  // With a halo (halo.hpp, not owned, outliving the engine), `particles` are this process's part
+  // of a decomposed run (possibly none): every rebuild, force evaluation and energy is agreed
+  // with the other processes through it, so every call below that steps or sums is collective.
+  Engine(EngineSettings settings, Particles particles, Halo* halo = nullptr);
 
   void step();
   // Where a batch of run_steps may end early: kAtRebuild ends it after a step that rebuilt
@@ -127,7 +131,8 @@ class Engine {
   double time_s() const { return time_s_; }
   std::uint64_t step_count() const { return step_; }
   std::uint64_t rebuilds() const { return rebuilds_; }
-  // Particles times steps since construction (each step counts the particles it started with).
+  // Particles times steps since construction (each step counts the particles it started with;
+  // with a halo, this process's own).
   std::uint64_t particle_steps() const { return particle_steps_; }
   const PhaseTimes& phase_times() const { return phases_; }
   // Index of the particle with stable id `id` in the current order; kRemoved once the sink took
@@ -139,7 +144,11 @@ class Engine {
   // Particles the sink removed so far, and their mass [kg].
   std::uint64_t removed_count() const { return removed_count_; }
   double removed_mass() const { return removed_mass_; }
+  // With a halo, over every process (collective), ghosts not counted.
   Energies energies() const;
+  // The particles of the run: this engine's, or with a halo every process's owned ones
+  // (as of the last rebuild).
+  std::uint64_t run_particles() const { return run_particles_; }
   // Pairs with overlap above 1 % of the smaller diameter, counted over all steps (and whether
   // the one warning has been given).
   std::uint64_t large_overlap_count() const { return large_overlaps_; }
@@ -169,6 +178,7 @@ class Engine {
 
  private:
   void rebuild();
+  Energies local_energies() const;  // this process's particles (dissipated not set)
   // sink.cpp: removes the particles below the sink level (particle arrays and the old pair
   // list, renumbered), and indexes the stable ids of the particles left.
   void remove_sunk_particles();
@@ -194,6 +204,9 @@ class Engine {
   [[noreturn]] void fail(const std::string& what, std::uint32_t index) const;
 
   EngineSettings settings_;
+  Halo* halo_ = nullptr;
+  CarriedSprings carried_;  // with a halo: the springs a rebuild carries
+  std::uint64_t run_particles_ = 0;
   StepIsa step_isa_ = step_isa();
   PairCoefficients coefficients_;
   Particles particles_;
