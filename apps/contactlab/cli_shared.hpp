@@ -48,8 +48,10 @@ Subcommand add_emulate_command(CLI::App& app, const std::string& command_line);
 Subcommand add_demo_command(CLI::App& app);
 Subcommand add_probe_command(CLI::App& app, const std::string& command_line);
 Subcommand add_dem_command(CLI::App& app, const std::string& command_line);
-// `dem variants` and `dem profile`, under the dem command (dem_study_command.cpp).
+// `dem variants`, `dem profile` and `dem partition`, under the dem command (dem_study_command.cpp).
 std::vector<Subcommand> add_dem_study_commands(CLI::App& dem_app, const std::string& command_line);
+// `dem partition`, under the dem command (dem_partition_command.cpp).
+Subcommand add_dem_partition_command(CLI::App& dem_app, const std::string& command_line);
 // `dem profile`, under the dem command (dem_profile_command.cpp).
 Subcommand add_dem_profile_command(CLI::App& dem_app, const std::string& command_line);
 

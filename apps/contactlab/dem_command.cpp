@@ -17,6 +17,7 @@
 #include "contactlab/dem/discharge.hpp"
 #include "contactlab/dem/output.hpp"
 #include "contactlab/tuner_dem/force_model.hpp"
+#include "dem_mpi.hpp"
 #include "dem_start.hpp"
 #ifdef CONTACTLAB_HAVE_CAIRO
 #include "contactlab/dem/picture.hpp"
@@ -131,13 +132,49 @@ struct DemRunCommand {
   double retune_margin_ = 0.05;
   std::uint64_t calibration_steps_ = 50;
   std::string variant_log_;
+  bool mpi_ = false;
+  std::string axis_;
+  std::string json_out_;
+  std::string command_line_;
 
   static std::string in_dir(std::string dir, const std::string& file) {
     if (!dir.empty() && dir.back() != '/') dir += '/';
     return dir + file;
   }
 
+  // --mpi: the run decomposed over the processes (dem_mpi.cpp); what it does not do yet is
+  // refused by name.
+  int run_mpi() const {
+    DemMpiRequest request;
+    request.config = config_;
+    request.threads = threads_;
+    request.steps = steps_;
+    request.until_discharged = until_discharged_;
+    request.axis = axis_;
+    request.json_out = json_out_;
+    request.command_line = command_line_;
+    request.check_options = [this] {
+      const std::pair<bool, const char*> unsupported[] = {
+          {!vtk_dir_.empty(), "--vtk"},         {!png_dir_.empty(), "--png"},
+          {!discharge_.empty(), "--discharge"}, {!restart_.empty(), "--restart"},
+          {!checkpoint_.empty(), "--checkpoint"}, {!variant_.empty(), "--variant"},
+          {retune_, "--retune"},                {!variant_log_.empty(), "--variant-log"}};
+      for (const auto& [given, name] : unsupported) {
+        if (given) throw InputError(std::string(name) + " is not available with --mpi yet (#49)");
+      }
+    };
+#ifdef CONTACTLAB_HAVE_MPI
+    return run_dem_mpi(request);
+#else
+    throw InputError("this contactlab was built without MPI (dem run --mpi)");
+#endif
+  }
+
   int run() const {
+    if (mpi_) return run_mpi();
+    if (!axis_.empty() || !json_out_.empty()) {
+      throw InputError(std::string(!axis_.empty() ? "--axis" : "--json") + " needs --mpi");
+    }
     const dem::DemConfig config = dem::read_dem_config(config_);
     dem::EngineSettings settings = config.settings;
     settings.threads = resolve_threads(threads_);
@@ -387,6 +424,7 @@ Subcommand add_dem_command(CLI::App& app, const std::string& command_line) {
   CLI::App* sub = app.add_subcommand("dem", "DEM: run a config, validate the engine, study dt");
   sub->require_subcommand(1);
   auto run = std::make_shared<DemRunCommand>();
+  run->command_line_ = command_line;
   CLI::App* run_app = sub->add_subcommand("run", "run a DEM config");
   run_app->add_option("config", run->config_, "DEM config (JSON, docs/dem.md)")->required();
   run_app->add_option("--threads", run->threads_, "OpenMP threads (0 = OpenMP's default)");
@@ -416,6 +454,13 @@ Subcommand add_dem_command(CLI::App& app, const std::string& command_line) {
   run_app->add_option("--restart", run->restart_, "continue from a checkpoint of this config");
   run_app->add_option("--until-discharged", run->until_discharged_,
                       "stop once the sink has taken this fraction of the mass (e.g. 0.5)");
+  run_app->add_flag("--mpi", run->mpi_,
+                    "run decomposed over the MPI processes (under mpirun): slabs balanced by "
+                    "work, ghosts exchanged every step, particles and their contact history "
+                    "migrating at rebuilds");
+  run_app->add_option("--axis", run->axis_, "--mpi: the slabs' axis x, y or z (default: longest)");
+  run_app->add_option("--json", run->json_out_,
+                      "--mpi: write the run and every rank's phase times as JSON");
   run_app->add_option("--checkpoint", run->checkpoint_,
                       "checkpoint file written at every output (default: DIR/last.chk with --vtk)");
   auto validate = std::make_shared<DemValidateCommand>();

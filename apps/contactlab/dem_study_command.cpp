@@ -62,7 +62,8 @@ std::vector<Subcommand> add_dem_study_commands(CLI::App& dem_app, const std::str
   variants_app->add_option("--chunks", variants->chunks_, "chunk sizes to enumerate (1,16)")
       ->delimiter(',');
   return {{variants_app, [=] { return variants->run(); }},
-          add_dem_profile_command(dem_app, command_line)};
+          add_dem_profile_command(dem_app, command_line),
+          add_dem_partition_command(dem_app, command_line)};
 }
 
 }  // namespace contactlab::cli

@@ -17,6 +17,7 @@
 #include "contactlab/tuner/context.hpp"
 #include "contactlab/tuner/result_schema.hpp"
 #include "contactlab/tuner/tune_report.hpp"
+#include "mpi_errors.hpp"
 #include "mpi_tuning.hpp"
 
 namespace contactlab::cli {
@@ -151,26 +152,6 @@ void open_source(const SceneOptions& scene, mpi::Mode mode, OpenedSource& out) {
     out.loaded.emplace(scene.load());
     out.source.scene = &out.loaded->first;
     out.record = out.loaded->second;
-  }
-}
-
-// Runs `body` (the whole MPI command) and turns agreed errors into one message: the reporting
-// rank prints before MPI_Finalize and the barrier holds the others until it has, because
-// mpirun ends the job at the first non-zero exit.
-template <class Body>
-int with_agreed_errors(MPI_Comm comm, const Body& body) {
-  try {
-    return body();
-  } catch (const InputError& e) {
-    fmt::print(stderr, "contactlab: error: {}\n", e.what());
-    std::fflush(stderr);
-    MPI_Barrier(comm);
-    throw ReportedElsewhere();
-  } catch (const ReportedElsewhere&) {
-    MPI_Barrier(comm);
-    throw;
-  } catch (const std::exception& e) {
-    mpi::abort_all(comm, e.what(), 2);
   }
 }
 

@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "contactlab/dem/engine.hpp"
 #include "contactlab/dem/pair_list.hpp"
 #include "contactlab/dem/particles.hpp"
 
@@ -66,5 +67,18 @@ struct SlabLoad {
 };
 SlabLoad slab_load(const Slabs& slabs, const Particles& particles, std::span<const double> work,
                    double halo);
+
+// A run's decomposition from its start: the neighbour list of all its particles (one process)
+// weighs them, the slabs balance that work along `axis` (-1: the longest), and the halo is the
+// list's reach, 2 r_max + skin, with the skin the engine will use (the settings' or 0.1 x the
+// largest diameter). Every process of a decomposed run computes the same plan.
+struct SlabPlan {
+  Slabs slabs;
+  double skin = 0.0, halo = 0.0;  // m
+  std::uint64_t pairs = 0;        // in the list that weighed the particles
+  SlabLoad load;
+};
+SlabPlan plan_slabs(const Particles& particles, const EngineSettings& settings, int ranks,
+                    int axis = -1);
 
 }  // namespace contactlab::dem

@@ -1,0 +1,228 @@
+// `dem run --mpi` (dem_mpi.hpp).
+#include "dem_mpi.hpp"
+
+#include <fmt/core.h>
+#include <omp.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <vector>
+
+#include "cli_shared.hpp"
+#include "contactlab/dem/config.hpp"
+#include "contactlab/dem/engine.hpp"
+#include "contactlab/dem/slabs.hpp"
+#include "contactlab/dem_mpi/halo_exchange.hpp"
+#include "contactlab/kernels/atomic_file.hpp"
+#include "contactlab/kernels/error.hpp"
+#include "contactlab/mpi/runtime.hpp"
+#include "contactlab/tuner/context.hpp"
+#include "mpi_errors.hpp"
+
+namespace contactlab::cli {
+namespace {
+
+namespace dem = contactlab::dem;
+namespace tn = contactlab::tuner;
+
+// One rank's account of the run, gathered on rank 0.
+struct RankAccount {
+  double owned = 0, ghosts = 0, neighbor_s = 0, force_s = 0, integrate_s = 0, refresh_s = 0,
+         migration_s = 0, wait_s = 0, migrated = 0, messages = 0;
+};
+constexpr int kAccountFields = 10;
+
+std::vector<RankAccount> gather_accounts(MPI_Comm comm, const RankAccount& mine) {
+  const int ranks = mpi::size_of(comm);
+  std::vector<RankAccount> all(static_cast<std::size_t>(ranks));
+  static_assert(sizeof(RankAccount) == kAccountFields * sizeof(double));
+  MPI_Gather(&mine, kAccountFields, MPI_DOUBLE, all.data(), kAccountFields, MPI_DOUBLE, 0, comm);
+  return all;
+}
+
+// The runs' steps, as `dem run` counts them: --steps N, or to the config's end.
+std::uint64_t steps_to_run(const DemMpiRequest& request, const dem::DemConfig& config) {
+  if (request.steps > 0) return request.steps;
+  return static_cast<std::uint64_t>(std::llround(config.end_time_s / config.settings.dt_s));
+}
+
+}  // namespace
+
+int run_dem_mpi(const DemMpiRequest& request) {
+  mpi::Session session(nullptr, nullptr);
+  const MPI_Comm comm = MPI_COMM_WORLD;
+  const int rank = mpi::rank_of(comm), ranks = mpi::size_of(comm);
+  return with_agreed_errors(comm, [&] {
+    dem::DemConfig config;
+    dem::EngineSettings settings;
+    dem::Particles own;
+    dem::SlabPlan plan;
+    std::size_t particles = 0;
+    // Every rank reads the config and plans the same slabs (O(N) each at the start), then
+    // keeps its own particles.
+    mpi::run_checked(comm, [&] {
+      request.check_options();
+      if (request.until_discharged < 0 || request.until_discharged > 1) {
+        throw InputError("--until-discharged must be a fraction in (0, 1]");
+      }
+      const int axis = request.axis.empty() ? -1 : dem::parse_axis(request.axis);
+      if (!request.json_out.empty() && rank == 0) prepare_output_file(request.json_out);
+      config = dem::read_dem_config(request.config);
+      settings = config.settings;
+      settings.threads = resolve_threads(request.threads);
+      if (settings.threads < 1) throw InputError("--threads must be >= 0");
+      if (request.until_discharged > 0 &&
+          !(settings.sink_below_z > -std::numeric_limits<double>::infinity())) {
+        throw InputError("--until-discharged needs a config with a sink");
+      }
+      const dem::Particles all = dem::make_particles(config);
+      particles = all.size();
+      plan = dem::plan_slabs(all, settings, ranks, axis);
+      own = dem::slab_particles(plan.slabs, all, rank);
+    });
+    settings.skin = plan.skin;  // every rank the same, from all the particles
+    dem::mpi::HaloExchange halo(comm, plan.slabs, plan.halo);
+    // From here every failure may leave other ranks in a collective: it aborts them all.
+    std::unique_ptr<dem::Engine> engine;
+    try {
+      engine = std::make_unique<dem::Engine>(settings, std::move(own), &halo);
+    } catch (const std::exception& e) {
+      mpi::abort_all(comm, e.what(), 2);
+    }
+    const std::uint64_t total_steps = steps_to_run(request, config);
+    const double start_mass = halo.sum_over_ranks([&] {
+      double m = 0.0;
+      for (std::size_t a = 0; a < engine->particles().size(); ++a) {
+        if (!halo.is_ghost(a)) m += engine->particles().mass[a];
+      }
+      return m;
+    }());
+    const double stop_mass = request.until_discharged * start_mass;
+    if (rank == 0) {
+      fmt::print(
+          "dem run '{}' --mpi: {} particles over {} ranks x {} threads, slabs along {}{} "
+          "(imbalance {:.3f} at the start), halo {:.4g} m; dt = {:.6g} s, {} steps\n",
+          config.name, particles, ranks, settings.threads, dem::axis_name(plan.slabs.axis),
+          plan.slabs.periodic ? " (periodic)" : "", plan.load.imbalance, plan.halo, settings.dt_s,
+          total_steps);
+    }
+    // Batches of at most 1000 steps; with --until-discharged each ends at a rebuild (the only
+    // step the sink takes particles), and the discharged mass is summed over the ranks there.
+    const auto end = stop_mass > 0 ? dem::Engine::BatchEnd::kAtRebuild
+                                   : dem::Engine::BatchEnd::kAfterSteps;
+    MPI_Barrier(comm);
+    const double t0 = omp_get_wtime();
+    double discharged = 0.0;
+    try {
+      while (engine->step_count() < total_steps && engine->run_particles() > 0) {
+        engine->run_steps(std::min<std::uint64_t>(1000, total_steps - engine->step_count()), end);
+        if (stop_mass > 0) {
+          discharged = halo.sum_over_ranks(engine->removed_mass());
+          if (discharged >= stop_mass) break;
+        }
+      }
+    } catch (const std::exception& e) {
+      mpi::abort_all(comm, e.what(), 4);
+    }
+    const double wall = omp_get_wtime() - t0;
+    discharged = halo.sum_over_ranks(engine->removed_mass());
+    const double particle_steps = halo.sum_over_ranks(static_cast<double>(engine->particle_steps()));
+    const dem::Energies energy = engine->energies();
+    const dem::PhaseTimes& ph = engine->phase_times();
+    const dem::mpi::HaloStats& hs = halo.stats();
+    const RankAccount mine{static_cast<double>(halo.owned_count()),
+                           static_cast<double>(hs.ghosts),
+                           ph.neighbor_s,
+                           ph.force_s(),
+                           ph.integrate_s,
+                           hs.refresh_s,
+                           hs.migration_s,
+                           hs.agreement_s,
+                           static_cast<double>(hs.migrated),
+                           static_cast<double>(hs.messages)};
+    const std::vector<RankAccount> accounts = gather_accounts(comm, mine);
+    mpi::run_checked(comm, [&] {
+      if (rank != 0) return;
+      fmt::print(
+          "done: t = {:.6g} s, {} steps in {:.3f} s ({:.3g} particle-steps/s over all ranks), "
+          "{} rebuilds\n",
+          engine->time_s(), engine->step_count(), wall, particle_steps / std::max(wall, 1e-9),
+          engine->rebuilds());
+      fmt::print(
+          "{:>5} {:>9} {:>8} {:>10} {:>10} {:>10} {:>10} {:>10} {:>10} {:>9}\n", "rank", "owned",
+          "ghosts", "forces s", "list s", "integr. s", "halo s", "migrate s", "waits s",
+          "migrated");
+      double force_max = 0.0, force_sum = 0.0;
+      nlohmann::json rows = nlohmann::json::array();
+      for (int r = 0; r < ranks; ++r) {
+        const RankAccount& a = accounts[r];
+        fmt::print("{:>5} {:>9} {:>8} {:>10.3f} {:>10.3f} {:>10.3f} {:>10.3f} {:>10.3f} "
+                   "{:>10.3f} {:>9}\n",
+                   r, a.owned, a.ghosts, a.force_s, a.neighbor_s, a.integrate_s, a.refresh_s,
+                   a.migration_s, a.wait_s, a.migrated);
+        force_max = std::max(force_max, a.force_s);
+        force_sum += a.force_s;
+        rows.push_back({{"rank", r},
+                        {"owned_at_end", a.owned},
+                        {"ghosts_at_end", a.ghosts},
+                        {"forces_s", a.force_s},
+                        {"neighbor_list_s", a.neighbor_s},
+                        {"integration_s", a.integrate_s},
+                        {"ghost_exchange_s", a.refresh_s},
+                        {"migration_s", a.migration_s},
+                        {"agreement_wait_s", a.wait_s},
+                        {"migrated", a.migrated},
+                        {"messages", a.messages},
+                        {"slab_lo_m", std::isfinite(plan.slabs.cuts[r])
+                                          ? nlohmann::json(plan.slabs.cuts[r])
+                                          : nlohmann::json()},
+                        {"slab_hi_m", std::isfinite(plan.slabs.cuts[r + 1])
+                                          ? nlohmann::json(plan.slabs.cuts[r + 1])
+                                          : nlohmann::json()}});
+      }
+      const double force_imbalance = force_sum > 0 ? force_max / (force_sum / ranks) : 1.0;
+      fmt::print(
+          "force time imbalance (slowest / mean): {:.3f}; energy [J]: kinetic {:.6g}, potential "
+          "{:.6g}, dissipated {:.6g}\n",
+          force_imbalance, energy.kinetic, energy.potential, energy.dissipated);
+      if (discharged > 0) {
+        fmt::print("discharged: {:.6g} kg; {} particles left\n", discharged,
+                   engine->run_particles());
+      }
+      if (request.json_out.empty()) return;
+      const nlohmann::json doc{
+          {"schema_version", 1},
+          {"kind", "contactlab-dem-mpi-run"},
+          {"context", tn::collect_context(request.command_line, settings.threads)},
+          {"config", config.name},
+          {"particles", particles},
+          {"ranks", ranks},
+          {"threads_per_rank", settings.threads},
+          {"axis", dem::axis_name(plan.slabs.axis)},
+          {"halo_m", plan.halo},
+          {"start_imbalance", plan.load.imbalance},
+          {"steps", engine->step_count()},
+          {"time_s", engine->time_s()},
+          {"wall_s", wall},
+          {"particle_steps_per_s", particle_steps / std::max(wall, 1e-9)},
+          {"rebuilds", engine->rebuilds()},
+          {"force_imbalance", force_imbalance},
+          {"discharged_kg", discharged},
+          {"particles_left", engine->run_particles()},
+          {"energy_j",
+           {{"kinetic", energy.kinetic},
+            {"potential", energy.potential},
+            {"dissipated", energy.dissipated}}},
+          {"per_rank", rows}};
+      write_file_atomically(request.json_out,
+                            [&](std::ostream& out) { out << doc.dump(2) << '\n'; });
+      fmt::print("wrote {}\n", request.json_out);
+    });
+    return 0;
+  });
+}
+
+}  // namespace contactlab::cli

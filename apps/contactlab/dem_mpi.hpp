@@ -1,0 +1,28 @@
+// `dem run --mpi`: what the dem command hands to its MPI path (dem_mpi.cpp, built only with
+// MPI).
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <string>
+
+namespace contactlab::cli {
+
+struct DemMpiRequest {
+  std::string config;
+  int threads = 0;
+  std::uint64_t steps = 0;        // 0: to the config's end
+  double until_discharged = 0.0;  // 0: off
+  std::string axis;               // empty: the longest
+  std::string json_out;
+  std::string command_line;
+  std::function<void()> check_options;  // run on every rank; throws InputError
+};
+
+// Initialises MPI and runs the config decomposed into slabs over every rank of MPI_COMM_WORLD
+// (dem/slabs.hpp, dem_mpi/halo_exchange.hpp); rank 0 prints the run and the per-rank phase
+// times and writes --json. A bad config ends every rank with one message; a failure inside the
+// run (an unstable particle, out of memory) aborts every rank with the failing rank's message.
+int run_dem_mpi(const DemMpiRequest& request);
+
+}  // namespace contactlab::cli
