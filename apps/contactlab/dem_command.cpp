@@ -154,11 +154,14 @@ struct DemRunCommand {
     request.json_out = json_out_;
     request.command_line = command_line_;
     request.check_options = [this] {
-      const std::pair<bool, const char*> unsupported[] = {
-          {!vtk_dir_.empty(), "--vtk"},         {!png_dir_.empty(), "--png"},
-          {!discharge_.empty(), "--discharge"}, {!restart_.empty(), "--restart"},
-          {!checkpoint_.empty(), "--checkpoint"}, {!variant_.empty(), "--variant"},
-          {retune_, "--retune"},                {!variant_log_.empty(), "--variant-log"}};
+      const std::pair<bool, const char*> unsupported[] = {{!vtk_dir_.empty(), "--vtk"},
+                                                          {!png_dir_.empty(), "--png"},
+                                                          {!discharge_.empty(), "--discharge"},
+                                                          {!restart_.empty(), "--restart"},
+                                                          {!checkpoint_.empty(), "--checkpoint"},
+                                                          {!variant_.empty(), "--variant"},
+                                                          {retune_, "--retune"},
+                                                          {!variant_log_.empty(), "--variant-log"}};
       for (const auto& [given, name] : unsupported) {
         if (given) throw InputError(std::string(name) + " is not available with --mpi yet (#49)");
       }

@@ -111,8 +111,8 @@ int run_dem_mpi(const DemMpiRequest& request) {
     }
     // Batches of at most 1000 steps; with --until-discharged each ends at a rebuild (the only
     // step the sink takes particles), and the discharged mass is summed over the ranks there.
-    const auto end = stop_mass > 0 ? dem::Engine::BatchEnd::kAtRebuild
-                                   : dem::Engine::BatchEnd::kAfterSteps;
+    const auto end =
+        stop_mass > 0 ? dem::Engine::BatchEnd::kAtRebuild : dem::Engine::BatchEnd::kAfterSteps;
     MPI_Barrier(comm);
     const double t0 = omp_get_wtime();
     double discharged = 0.0;
@@ -129,7 +129,8 @@ int run_dem_mpi(const DemMpiRequest& request) {
     }
     const double wall = omp_get_wtime() - t0;
     discharged = halo.sum_over_ranks(engine->removed_mass());
-    const double particle_steps = halo.sum_over_ranks(static_cast<double>(engine->particle_steps()));
+    const double particle_steps =
+        halo.sum_over_ranks(static_cast<double>(engine->particle_steps()));
     const dem::Energies energy = engine->energies();
     const dem::PhaseTimes& ph = engine->phase_times();
     const dem::mpi::HaloStats& hs = halo.stats();
@@ -151,37 +152,37 @@ int run_dem_mpi(const DemMpiRequest& request) {
           "{} rebuilds\n",
           engine->time_s(), engine->step_count(), wall, particle_steps / std::max(wall, 1e-9),
           engine->rebuilds());
-      fmt::print(
-          "{:>5} {:>9} {:>8} {:>10} {:>10} {:>10} {:>10} {:>10} {:>10} {:>9}\n", "rank", "owned",
-          "ghosts", "forces s", "list s", "integr. s", "halo s", "migrate s", "waits s",
-          "migrated");
+      fmt::print("{:>5} {:>9} {:>8} {:>10} {:>10} {:>10} {:>10} {:>10} {:>10} {:>9}\n", "rank",
+                 "owned", "ghosts", "forces s", "list s", "integr. s", "halo s", "migrate s",
+                 "waits s", "migrated");
       double force_max = 0.0, force_sum = 0.0;
       nlohmann::json rows = nlohmann::json::array();
       for (int r = 0; r < ranks; ++r) {
         const RankAccount& a = accounts[r];
-        fmt::print("{:>5} {:>9} {:>8} {:>10.3f} {:>10.3f} {:>10.3f} {:>10.3f} {:>10.3f} "
-                   "{:>10.3f} {:>9}\n",
-                   r, a.owned, a.ghosts, a.force_s, a.neighbor_s, a.integrate_s, a.refresh_s,
-                   a.migration_s, a.wait_s, a.migrated);
+        fmt::print(
+            "{:>5} {:>9} {:>8} {:>10.3f} {:>10.3f} {:>10.3f} {:>10.3f} {:>10.3f} "
+            "{:>10.3f} {:>9}\n",
+            r, a.owned, a.ghosts, a.force_s, a.neighbor_s, a.integrate_s, a.refresh_s,
+            a.migration_s, a.wait_s, a.migrated);
         force_max = std::max(force_max, a.force_s);
         force_sum += a.force_s;
-        rows.push_back({{"rank", r},
-                        {"owned_at_end", a.owned},
-                        {"ghosts_at_end", a.ghosts},
-                        {"forces_s", a.force_s},
-                        {"neighbor_list_s", a.neighbor_s},
-                        {"integration_s", a.integrate_s},
-                        {"ghost_exchange_s", a.refresh_s},
-                        {"migration_s", a.migration_s},
-                        {"agreement_wait_s", a.wait_s},
-                        {"migrated", a.migrated},
-                        {"messages", a.messages},
-                        {"slab_lo_m", std::isfinite(plan.slabs.cuts[r])
-                                          ? nlohmann::json(plan.slabs.cuts[r])
-                                          : nlohmann::json()},
-                        {"slab_hi_m", std::isfinite(plan.slabs.cuts[r + 1])
-                                          ? nlohmann::json(plan.slabs.cuts[r + 1])
-                                          : nlohmann::json()}});
+        rows.push_back(
+            {{"rank", r},
+             {"owned_at_end", a.owned},
+             {"ghosts_at_end", a.ghosts},
+             {"forces_s", a.force_s},
+             {"neighbor_list_s", a.neighbor_s},
+             {"integration_s", a.integrate_s},
+             {"ghost_exchange_s", a.refresh_s},
+             {"migration_s", a.migration_s},
+             {"agreement_wait_s", a.wait_s},
+             {"migrated", a.migrated},
+             {"messages", a.messages},
+             {"slab_lo_m", std::isfinite(plan.slabs.cuts[r]) ? nlohmann::json(plan.slabs.cuts[r])
+                                                             : nlohmann::json()},
+             {"slab_hi_m", std::isfinite(plan.slabs.cuts[r + 1])
+                               ? nlohmann::json(plan.slabs.cuts[r + 1])
+                               : nlohmann::json()}});
       }
       const double force_imbalance = force_sum > 0 ? force_max / (force_sum / ranks) : 1.0;
       fmt::print(

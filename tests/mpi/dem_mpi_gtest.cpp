@@ -89,8 +89,8 @@ Outcome decomposed(const EngineSettings& settings, const Particles& particles, i
   Outcome out;
   out.state.resize(state.size());
   std::vector<double> owners(mark.size());
-  MPI_Reduce(state.data(), out.state.data(), static_cast<int>(state.size()), MPI_DOUBLE, MPI_SUM,
-             0, MPI_COMM_WORLD);
+  MPI_Reduce(state.data(), out.state.data(), static_cast<int>(state.size()), MPI_DOUBLE, MPI_SUM, 0,
+             MPI_COMM_WORLD);
   MPI_Reduce(mark.data(), owners.data(), static_cast<int>(mark.size()), MPI_DOUBLE, MPI_SUM, 0,
              MPI_COMM_WORLD);
   if (rank() == 0) {
@@ -160,7 +160,9 @@ TEST_P(DemMpiAxes, ASinkDrainsTheSameParticlesAndMass) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Slabs, DemMpiAxes, ::testing::Values(0, 2),
-                         [](const ::testing::TestParamInfo<int>& axis) { return axis_name(axis.param); });
+                         [](const ::testing::TestParamInfo<int>& axis) {
+                           return axis_name(axis.param);
+                         });
 
 // Two spheres pressed together and sheared (opposite tangential velocities, spinning), drifting
 // together across the slab boundaries: the rank that takes them over must continue their
@@ -183,7 +185,8 @@ TEST(DemMpiMigration, AShearedPairKeepsItsFrictionAcrossTheBoundary) {
   Particles particles;
   // Sphere 1 rests on sphere 0, which rests on the floor; both slide along x (across x = 0 in
   // about 2 ms) spinning the same way about x, so that their contact slips (sheared) and
-  // stays on, its spring at the Coulomb limit. Two more spheres far left and right keep every slab in use.
+  // stays on, its spring at the Coulomb limit. Two more spheres far left and right keep every slab
+  // in use.
   particles.add(0, 0, -0.004, 0.0, 0.0, 1e-3, 2500.0);
   particles.add(1, 0, -0.004, 0.0, 2e-3, 1e-3, 2500.0);
   particles.add(2, 0, -0.015, 0.0, 0.0, 1e-3, 2500.0);
@@ -206,7 +209,9 @@ TEST(DemMpiMigration, AShearedPairKeepsItsFrictionAcrossTheBoundary) {
   if (ranks() >= 2) {
     slabs.cuts[ranks() / 2] = 0.0;
     for (int r = 1; r < ranks(); ++r) {
-      slabs.cuts[r] = r < ranks() / 2 ? -0.01 - 0.001 * r : r > ranks() / 2 ? 0.01 + 0.001 * r : 0.0;
+      slabs.cuts[r] = r < ranks() / 2   ? -0.01 - 0.001 * r
+                      : r > ranks() / 2 ? 0.01 + 0.001 * r
+                                        : 0.0;
     }
   }
   const Particles own = slab_particles(slabs, particles, rank());

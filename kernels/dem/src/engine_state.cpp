@@ -53,9 +53,10 @@ Energies Engine::local_energies() const {
     const double h2 = q.hx[k] * q.hx[k] + q.hy[k] * q.hy[k] + q.hz[k] * q.hz[k];
     // With a halo, a pair is every process's that holds one of its particles: each counts its
     // own particles' halves.
-    const double share = halo_ == nullptr
-                             ? 1.0
-                             : 0.5 * ((halo_->is_ghost(i) ? 0.0 : 1.0) + (halo_->is_ghost(j) ? 0.0 : 1.0));
+    const double share =
+        halo_ == nullptr
+            ? 1.0
+            : 0.5 * ((halo_->is_ghost(i) ? 0.0 : 1.0) + (halo_->is_ghost(j) ? 0.0 : 1.0));
     elastic += share * (0.5 * kn * delta * delta + 0.5 * c.kt_ratio * kn * h2);
   }
   e.potential += elastic;

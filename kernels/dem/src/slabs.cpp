@@ -75,8 +75,8 @@ std::vector<double> particle_work(const Particles& particles, const PairList& pa
   return work;
 }
 
-Slabs balance_slabs(const Particles& particles, std::span<const double> work, int ranks,
-                    int axis, const Domain& domain) {
+Slabs balance_slabs(const Particles& particles, std::span<const double> work, int ranks, int axis,
+                    const Domain& domain) {
   if (ranks < 1) throw InputError("ranks must be >= 1 (got " + std::to_string(ranks) + ")");
   if (axis < 0 || axis > 2) throw InputError("the slab axis must be x, y or z");
   Slabs slabs;
@@ -106,7 +106,7 @@ Slabs balance_slabs(const Particles& particles, std::span<const double> work, in
     while (k < n && running + work[order[k]] <= target) running += work[order[k++]];
     // Halfway between the last particle below the target and the next one; past the particles,
     // at the last one's far side (the slabs after it are empty).
-    double cut = k == 0 ? (n > 0 ? wrapped[order[0]] : slabs.cuts.front())
+    double cut = k == 0  ? (n > 0 ? wrapped[order[0]] : slabs.cuts.front())
                  : k < n ? 0.5 * (wrapped[order[k - 1]] + wrapped[order[k]])
                          : std::nextafter(wrapped[order[n - 1]], inf);
     if (!std::isfinite(cut)) cut = slabs.periodic ? slabs.hi : 0.0;

@@ -214,13 +214,15 @@ void HaloExchange::exchange_particles(Particles& p, CarriedSprings& carried) {
 void HaloExchange::index_ghosts(const Particles& p) {
   std::unordered_map<std::uint32_t, std::uint32_t> index_of;
   index_of.reserve(p.size());
-  for (std::size_t a = 0; a < p.size(); ++a) index_of.emplace(p.id[a], static_cast<std::uint32_t>(a));
+  for (std::size_t a = 0; a < p.size(); ++a)
+    index_of.emplace(p.id[a], static_cast<std::uint32_t>(a));
   ghost_.assign(p.size(), 0);
   exchanges_ = false;
   for (std::size_t r = 0; r < send_ids_.size(); ++r) {
     exchanges_ = exchanges_ || !send_ids_[r].empty() || !recv_ids_[r].empty();
     send_index_[r].resize(send_ids_[r].size());
-    for (std::size_t k = 0; k < send_ids_[r].size(); ++k) send_index_[r][k] = index_of.at(send_ids_[r][k]);
+    for (std::size_t k = 0; k < send_ids_[r].size(); ++k)
+      send_index_[r][k] = index_of.at(send_ids_[r][k]);
     recv_index_[r].resize(recv_ids_[r].size());
     for (std::size_t k = 0; k < recv_ids_[r].size(); ++k) {
       recv_index_[r][k] = index_of.at(recv_ids_[r][k]);

@@ -49,8 +49,8 @@ std::vector<double> particle_work(const Particles& particles, const PairList& pa
 // coordinate) crosses r W / ranks, halfway between the two particles there. Every rank's work
 // is then W / ranks within one particle's; ranks beyond the particles get empty slabs.
 // Throws InputError for ranks < 1 or an axis outside 0-2.
-Slabs balance_slabs(const Particles& particles, std::span<const double> work, int ranks,
-                    int axis, const Domain& domain);
+Slabs balance_slabs(const Particles& particles, std::span<const double> work, int ranks, int axis,
+                    const Domain& domain);
 
 // The axis along which the particles spread the most (the periodic extent where periodic).
 int longest_axis(const Particles& particles, const Domain& domain);

@@ -54,7 +54,7 @@ class HaloExchange final : public Halo {
   Slabs slabs_;
   double halo_width_;
   std::size_t owned_ = 0;
-  bool exchanges_ = false;  // ghosts sent or received since the last rebuild
+  bool exchanges_ = false;           // ghosts sent or received since the last rebuild
   std::vector<std::uint8_t> ghost_;  // by index, since index_ghosts
   // Per rank: the ids of the owned particles sent to it as ghosts, and of the ghosts it sent
   // here (in the order they come each step); then their indices in the current order.

@@ -1,0 +1,90 @@
+// `contactlab dem run --mpi` and `dem partition` end to end: the run's JSON has one entry per
+// rank and counts every particle once; the partition's slabs hold every particle once;
+// options --mpi does not support yet, a missing config and --axis without --mpi end every rank
+// with one message and a non-zero exit.
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "mpi_cli_support.hpp"
+#include "program_test_support.hpp"
+
+namespace contactlab::test {
+namespace {
+
+std::string drop_box() {
+  return std::string(CONTACTLAB_SOURCE_DIR) + "/experiments/dem/drop-box.json";
+}
+
+nlohmann::json read_json(const std::string& path) {
+  std::ifstream in(path);
+  return nlohmann::json::parse(in);
+}
+
+TEST(DemMpiCli, ARunOnThreeRanksCountsEveryParticleOnce) {
+  TempDir dir;
+  const auto run = run_command(mpiexec(3) + contactlab_exe() + " dem run " + drop_box() +
+                               " --mpi --threads 1 --steps 400 --json " + dir.file("run.json"));
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  EXPECT_EQ(count_of(run.output, "done: t = "), 1) << run.output;
+  const nlohmann::json doc = read_json(dir.file("run.json"));
+  EXPECT_EQ(doc["kind"], "contactlab-dem-mpi-run");
+  EXPECT_EQ(doc["ranks"], 3);
+  EXPECT_EQ(doc["steps"], 400);
+  ASSERT_EQ(doc["per_rank"].size(), 3u);
+  double owned = 0.0;
+  for (const auto& r : doc["per_rank"]) {
+    owned += r["owned_at_end"].get<double>();
+    EXPECT_GE(r["ghost_exchange_s"].get<double>(), 0.0);
+  }
+  EXPECT_EQ(owned, doc["particles"].get<double>());
+  EXPECT_GT(doc["particle_steps_per_s"].get<double>(), 0.0);
+}
+
+TEST(DemMpiCli, WhatMpiDoesNotSupportYetIsOneMessageOnEveryRankCount) {
+  TempDir dir;
+  const auto start = std::chrono::steady_clock::now();
+  const auto run = run_command(mpiexec(2) + contactlab_exe() + " dem run " + drop_box() +
+                               " --mpi --steps 10 --vtk " + dir.file("out"));
+  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 30.0);
+  EXPECT_NE(run.exit_code, 0) << run.output;
+  EXPECT_EQ(count_of(run.output, "contactlab: error:"), 1) << run.output;
+  EXPECT_NE(run.output.find("--vtk is not available with --mpi yet"), std::string::npos)
+      << run.output;
+}
+
+TEST(DemMpiCli, AMissingConfigEndsEveryRankWithOneMessage) {
+  const auto run = run_command(mpiexec(2) + contactlab_exe() +
+                               " dem run /nonexistent/config.json --mpi --steps 10");
+  EXPECT_NE(run.exit_code, 0) << run.output;
+  EXPECT_EQ(count_of(run.output, "contactlab: error:"), 1) << run.output;
+}
+
+TEST(DemMpiCli, AxisWithoutMpiIsRefused) {
+  const auto run = run_command(contactlab_exe() + " dem run " + drop_box() + " --axis z");
+  EXPECT_NE(run.exit_code, 0);
+  EXPECT_NE(run.output.find("--axis needs --mpi"), std::string::npos) << run.output;
+}
+
+TEST(DemPartitionCli, TheSlabsHoldEveryParticleOnce) {
+  TempDir dir;
+  const auto run = run_command(contactlab_exe() + " dem partition " + drop_box() +
+                               " --ranks 3 --axis z --json " + dir.file("p.json"));
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  const nlohmann::json doc = read_json(dir.file("p.json"));
+  EXPECT_EQ(doc["kind"], "contactlab-dem-partition");
+  EXPECT_EQ(doc["axis"], "z");
+  ASSERT_EQ(doc["per_rank"].size(), 3u);
+  std::uint64_t owned = 0;
+  for (const auto& r : doc["per_rank"]) owned += r["particles"].get<std::uint64_t>();
+  EXPECT_EQ(owned, doc["particles"].get<std::uint64_t>());
+  EXPECT_LT(doc["imbalance"].get<double>(), 1.2);
+  const auto bad = run_command(contactlab_exe() + " dem partition " + drop_box() + " --ranks 0");
+  EXPECT_NE(bad.exit_code, 0);
+  EXPECT_NE(bad.output.find("--ranks must be >= 1"), std::string::npos) << bad.output;
+}
+
+}  // namespace
+}  // namespace contactlab::test
