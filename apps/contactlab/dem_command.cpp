@@ -134,6 +134,7 @@ struct DemRunCommand {
   std::string variant_log_;
   bool mpi_ = false;
   std::string axis_;
+  double rebalance_margin_ = 0.1;
   std::string json_out_;
   std::string command_line_;
 
@@ -151,6 +152,7 @@ struct DemRunCommand {
     request.steps = steps_;
     request.until_discharged = until_discharged_;
     request.axis = axis_;
+    request.rebalance_margin = rebalance_margin_;
     request.json_out = json_out_;
     request.command_line = command_line_;
     request.check_options = [this] {
@@ -462,6 +464,9 @@ Subcommand add_dem_command(CLI::App& app, const std::string& command_line) {
                     "work, ghosts exchanged every step, particles and their contact history "
                     "migrating at rebuilds");
   run_app->add_option("--axis", run->axis_, "--mpi: the slabs' axis x, y or z (default: longest)");
+  run_app->add_option("--rebalance-margin", run->rebalance_margin_,
+                      "--mpi: re-cut the slabs at a rebuild where the largest rank's work exceeds "
+                      "the mean by this fraction (default 0.1; inf: never)");
   run_app->add_option("--json", run->json_out_,
                       "--mpi: write the run and every rank's phase times as JSON");
   run_app->add_option("--checkpoint", run->checkpoint_,

@@ -65,6 +65,9 @@ int run_dem_mpi(const DemMpiRequest& request) {
     // keeps its own particles.
     mpi::run_checked(comm, [&] {
       request.check_options();
+      if (!(request.rebalance_margin >= 0)) {
+        throw InputError("--rebalance-margin must be a fraction >= 0 (inf: never)");
+      }
       if (request.until_discharged < 0 || request.until_discharged > 1) {
         throw InputError("--until-discharged must be a fraction in (0, 1]");
       }
@@ -84,7 +87,7 @@ int run_dem_mpi(const DemMpiRequest& request) {
       own = dem::slab_particles(plan.slabs, all, rank);
     });
     settings.skin = plan.skin;  // every rank the same, from all the particles
-    dem::mpi::HaloExchange halo(comm, plan.slabs, plan.halo);
+    dem::mpi::HaloExchange halo(comm, plan.slabs, plan.halo, request.rebalance_margin);
     // From here every failure may leave other ranks in a collective: it aborts them all.
     std::unique_ptr<dem::Engine> engine;
     try {
@@ -186,6 +189,11 @@ int run_dem_mpi(const DemMpiRequest& request) {
       }
       const double force_imbalance = force_sum > 0 ? force_max / (force_sum / ranks) : 1.0;
       fmt::print(
+          "work imbalance at the rebuilds (largest rank / mean): mean {:.3f}, largest {:.3f} "
+          "over {} rebuilds; re-balanced {} times (margin {:g})\n",
+          hs.imbalance_mean(), hs.imbalance_max, hs.imbalance_samples, hs.rebalances,
+          request.rebalance_margin);
+      fmt::print(
           "force time imbalance (slowest / mean): {:.3f}; energy [J]: kinetic {:.6g}, potential "
           "{:.6g}, dissipated {:.6g}\n",
           force_imbalance, energy.kinetic, energy.potential, energy.dissipated);
@@ -211,6 +219,14 @@ int run_dem_mpi(const DemMpiRequest& request) {
           {"particle_steps_per_s", particle_steps / std::max(wall, 1e-9)},
           {"rebuilds", engine->rebuilds()},
           {"force_imbalance", force_imbalance},
+          {"work_imbalance",
+           {{"mean", hs.imbalance_mean()},
+            {"largest", hs.imbalance_max},
+            {"rebuilds", hs.imbalance_samples},
+            {"rebalances", hs.rebalances},
+            {"margin", std::isfinite(request.rebalance_margin)
+                           ? nlohmann::json(request.rebalance_margin)
+                           : nlohmann::json("never")}}},
           {"discharged_kg", discharged},
           {"particles_left", engine->run_particles()},
           {"energy_j",

@@ -14,6 +14,7 @@ struct DemMpiRequest {
   std::uint64_t steps = 0;        // 0: to the config's end
   double until_discharged = 0.0;  // 0: off
   std::string axis;               // empty: the longest
+  double rebalance_margin = 0.1;  // re-cut the slabs when the largest work exceeds the mean by it
   std::string json_out;
   std::string command_line;
   std::function<void()> check_options;  // run on every rank; throws InputError

@@ -9,6 +9,7 @@
 
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <vector>
 
 #include "contactlab/dem/engine.hpp"
@@ -64,7 +65,8 @@ Outcome one_process(const EngineSettings& settings, const Particles& particles,
 // particles its slab owns; the owned states are summed onto rank 0 (NaN-free: every id is
 // owned by exactly one rank or by none).
 Outcome decomposed(const EngineSettings& settings, const Particles& particles, int axis,
-                   std::uint64_t steps) {
+                   std::uint64_t steps,
+                   double rebalance_margin = std::numeric_limits<double>::infinity()) {
   const std::vector<double> work(particles.size(), 1.0);
   Slabs slabs = balance_slabs(particles, work, ranks(), axis, settings.domain);
   double max_r = 0.0;
@@ -72,7 +74,7 @@ Outcome decomposed(const EngineSettings& settings, const Particles& particles, i
   EngineSettings mine = settings;
   if (mine.skin <= 0.0) mine.skin = 0.1 * 2.0 * max_r;  // the engine's default, from all
   const Particles own = slab_particles(slabs, particles, rank());
-  HaloExchange halo(MPI_COMM_WORLD, slabs, 2.0 * max_r + mine.skin);
+  HaloExchange halo(MPI_COMM_WORLD, slabs, 2.0 * max_r + mine.skin, rebalance_margin);
   Engine engine(mine, own, &halo);
   engine.run_steps(steps);
   const Particles& p = engine.particles();
@@ -136,7 +138,7 @@ TEST_P(DemMpiAxes, TheBedIsTheOneProcessRunToTheLastBit) {
   }
 }
 
-TEST_P(DemMpiAxes, ASinkDrainsTheSameParticlesAndMass) {
+TEST_P(DemMpiAxes, ASinkDrainsTheSameParticlesAndMassWhileTheSlabsAreRebalanced) {
   auto [settings, particles] = small_bed(150);
   settings.walls.clear();
   Wall plate;
@@ -149,8 +151,14 @@ TEST_P(DemMpiAxes, ASinkDrainsTheSameParticlesAndMass) {
   for (double& vz : particles.vz) vz -= 1.0;
   constexpr std::uint64_t kSteps = 4000;
   const Outcome one = one_process(settings, particles, kSteps);
-  const Outcome many = decomposed(settings, particles, GetParam(), kSteps);
+  // Re-balanced at every rebuild (margin 0): the particles move to new slabs as they drain.
+  const Outcome many = decomposed(settings, particles, GetParam(), kSteps, 0.0);
+  std::uint64_t rebalances = many.stats.rebalances;
+  MPI_Allreduce(MPI_IN_PLACE, &rebalances, 1, MPI_UINT64_T, MPI_MAX, MPI_COMM_WORLD);
   if (rank() == 0) {
+    if (ranks() > 1) {
+      EXPECT_GT(rebalances, 0u) << "never re-balanced";
+    }
     EXPECT_GT(one.removed_mass, 0.0) << "nothing drained: the test is too easy";
     // The same particles' masses, summed per rank first: equal to rounding.
     EXPECT_DOUBLE_EQ(one.removed_mass, many.removed_mass);

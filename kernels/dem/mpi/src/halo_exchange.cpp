@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cstring>
+#include <limits>
 #include <unordered_set>
 #include <utility>
 
@@ -42,12 +43,13 @@ constexpr int kRefreshTag = 41;
 
 }  // namespace
 
-HaloExchange::HaloExchange(MPI_Comm comm, Slabs slabs, double halo_width)
+HaloExchange::HaloExchange(MPI_Comm comm, Slabs slabs, double halo_width, double rebalance_margin)
     : comm_(comm),
       rank_(contactlab::mpi::rank_of(comm)),
       ranks_(contactlab::mpi::size_of(comm)),
       slabs_(std::move(slabs)),
-      halo_width_(halo_width) {
+      halo_width_(halo_width),
+      rebalance_margin_(rebalance_margin) {
   const auto r = static_cast<std::size_t>(ranks_);
   send_ids_.resize(r);
   recv_ids_.resize(r);
@@ -89,6 +91,17 @@ Box HaloExchange::box_over_ranks(const Box& local) {
 
 void HaloExchange::drop_ghosts(Particles& particles, PairList& pairs, CarriedSprings& carried) {
   collect_springs(particles, pairs, carried);
+  // The owned particles' work as the list that ends here weighs it (slabs.hpp's measure), by
+  // id: the sink may take some before the re-balancing reads it.
+  std::vector<double> work(particles.size(), 1.0);
+  for (std::size_t k = 0; k < pairs.size(); ++k) {
+    work[pairs.i[k]] += 0.5;
+    work[pairs.j[k]] += 0.5;
+  }
+  work_of_id_.clear();
+  for (std::size_t a = 0; a < particles.size(); ++a) {
+    if (a >= ghost_.size() || ghost_[a] == 0) work_of_id_.emplace(particles.id[a], work[a]);
+  }
   if (owned_ < ghost_.size()) {
     std::vector<std::uint8_t> keep(ghost_.size());
     for (std::size_t a = 0; a < keep.size(); ++a) keep[a] = ghost_[a] == 0 ? 1 : 0;
@@ -99,8 +112,59 @@ void HaloExchange::drop_ghosts(Particles& particles, PairList& pairs, CarriedSpr
   owned_ = particles.size();
 }
 
+void HaloExchange::rebalance(const Particles& p) {
+  std::vector<double> work(p.size());
+  double local = 0.0;
+  for (std::size_t k = 0; k < p.size(); ++k) {
+    const auto found = work_of_id_.find(p.id[k]);
+    work[k] = found != work_of_id_.end() ? found->second : 1.0;
+    local += work[k];
+  }
+  double reduced[2];  // the work summed over the ranks, and the largest rank's
+  MPI_Allreduce(&local, &reduced[0], 1, MPI_DOUBLE, MPI_SUM, comm_);
+  MPI_Allreduce(&local, &reduced[1], 1, MPI_DOUBLE, MPI_MAX, comm_);
+  const double mean = reduced[0] / ranks_;
+  const double imbalance = mean > 0.0 ? reduced[1] / mean : 1.0;
+  stats_.imbalance_sum += imbalance;
+  stats_.imbalance_max = std::max(stats_.imbalance_max, imbalance);
+  ++stats_.imbalance_samples;
+  if (!(imbalance > 1.0 + rebalance_margin_) || mean <= 0.0) return;
+  // New cuts from a histogram of the work along the axis (kBins bins over the particles'
+  // extent, reduced over the ranks: O(kBins) per rank, whatever N is), each cut where the
+  // running work crosses r W / R, interpolated within its bin.
+  constexpr int kBins = 4096;
+  const std::vector<double>& c = coordinate(p, slabs_.axis);
+  double extent[2] = {std::numeric_limits<double>::infinity(),
+                      std::numeric_limits<double>::infinity()};  // -min, max
+  for (const double v : c) {
+    const double w = slabs_.wrap(v);
+    extent[0] = std::min(extent[0], w);
+    extent[1] = std::min(extent[1], -w);
+  }
+  double all[2];
+  MPI_Allreduce(extent, all, 2, MPI_DOUBLE, MPI_MIN, comm_);
+  const double lo = all[0], hi = -all[1];
+  const double width = hi > lo ? (hi - lo) / kBins : 1.0;
+  std::vector<double> histogram(kBins, 0.0), total(kBins, 0.0);
+  for (std::size_t k = 0; k < c.size(); ++k) {
+    const auto bin = std::clamp(static_cast<int>((slabs_.wrap(c[k]) - lo) / width), 0, kBins - 1);
+    histogram[static_cast<std::size_t>(bin)] += work[k];
+  }
+  MPI_Allreduce(histogram.data(), total.data(), kBins, MPI_DOUBLE, MPI_SUM, comm_);
+  double running = 0.0;
+  int bin = 0;
+  for (int r = 1; r < ranks_; ++r) {
+    const double target = reduced[0] * r / ranks_;
+    while (bin < kBins && running + total[bin] <= target) running += total[bin++];
+    const double fraction = bin < kBins && total[bin] > 0 ? (target - running) / total[bin] : 0;
+    slabs_.cuts[r] = std::max(slabs_.cuts[r - 1], lo + width * (bin + fraction));
+  }
+  ++stats_.rebalances;
+}
+
 void HaloExchange::exchange_particles(Particles& p, CarriedSprings& carried) {
   const double t0 = omp_get_wtime();
+  if (ranks_ > 1) rebalance(p);
   const auto rank_count = static_cast<std::size_t>(ranks_);
   const std::size_t record = record_bytes(p);
   // 1. Migration: the particles whose slab changed, each with the springs of all its contacts

@@ -25,12 +25,22 @@ struct HaloStats {
   double agreement_s = 0.0;  // the reductions every rank waits in (the rebuild decision, ...)
   std::uint64_t refreshes = 0, messages = 0, migrated = 0, migrated_springs = 0;
   std::uint64_t ghosts = 0;  // now
+  // The work imbalance (largest rank's work / mean, before any re-balancing) at each rebuild:
+  // its mean and largest over the run, and how many rebuilds re-balanced.
+  double imbalance_sum = 0.0, imbalance_max = 0.0;
+  std::uint64_t imbalance_samples = 0, rebalances = 0;
+  double imbalance_mean() const {
+    return imbalance_samples > 0 ? imbalance_sum / static_cast<double>(imbalance_samples) : 1.0;
+  }
 };
 
 class HaloExchange final : public Halo {
  public:
-  // `halo_width` at least the neighbour list's reach, 2 r_max + skin [m].
-  HaloExchange(MPI_Comm comm, Slabs slabs, double halo_width);
+  // `halo_width` at least the neighbour list's reach, 2 r_max + skin [m]. At a rebuild where
+  // the largest rank's work exceeds the mean by more than `rebalance_margin` (a fraction;
+  // infinity: never), the slabs are cut again from the particles' work as it stands then (each
+  // owned particle 1 + half its pairs), and the particles migrate to them.
+  HaloExchange(MPI_Comm comm, Slabs slabs, double halo_width, double rebalance_margin = 0.1);
 
   double max_over_ranks(double local) override;
   Box box_over_ranks(const Box& local) override;
@@ -53,6 +63,11 @@ class HaloExchange final : public Halo {
   int rank_ = 0, ranks_ = 1;
   Slabs slabs_;
   double halo_width_;
+  double rebalance_margin_;
+  // Per owned particle (by id), its work in the list before the rebuild.
+  std::unordered_map<std::uint32_t, double> work_of_id_;
+  // The rebuild's imbalance, and new cuts when it is above the margin (collective).
+  void rebalance(const Particles& particles);
   std::size_t owned_ = 0;
   bool exchanges_ = false;           // ghosts sent or received since the last rebuild
   std::vector<std::uint8_t> ghost_;  // by index, since index_ghosts
