@@ -154,13 +154,13 @@ struct DemRunCommand {
     request.axis = axis_;
     request.rebalance_margin = rebalance_margin_;
     request.json_out = json_out_;
+    request.checkpoint = checkpoint_;
     request.command_line = command_line_;
     request.check_options = [this] {
       const std::pair<bool, const char*> unsupported[] = {{!vtk_dir_.empty(), "--vtk"},
                                                           {!png_dir_.empty(), "--png"},
                                                           {!discharge_.empty(), "--discharge"},
                                                           {!restart_.empty(), "--restart"},
-                                                          {!checkpoint_.empty(), "--checkpoint"},
                                                           {!variant_.empty(), "--variant"},
                                                           {retune_, "--retune"},
                                                           {!variant_log_.empty(), "--variant-log"}};
@@ -470,7 +470,8 @@ Subcommand add_dem_command(CLI::App& app, const std::string& command_line) {
   run_app->add_option("--json", run->json_out_,
                       "--mpi: write the run and every rank's phase times as JSON");
   run_app->add_option("--checkpoint", run->checkpoint_,
-                      "checkpoint file written at every output (default: DIR/last.chk with --vtk)");
+                      "checkpoint file written at every output (default: DIR/last.chk with --vtk; "
+                      "with --mpi, at the end: the file one process would have written)");
   auto validate = std::make_shared<DemValidateCommand>();
   CLI::App* validate_app = sub->add_subcommand("validate", "run every validation case");
   validate_app->add_option("--case", validate->only_, "run only this case");

@@ -15,6 +15,7 @@
 #include "contactlab/dem/config.hpp"
 #include "contactlab/dem/engine.hpp"
 #include "contactlab/dem/slabs.hpp"
+#include "contactlab/dem_mpi/checkpoint.hpp"
 #include "contactlab/dem_mpi/halo_exchange.hpp"
 #include "contactlab/kernels/atomic_file.hpp"
 #include "contactlab/kernels/error.hpp"
@@ -73,6 +74,7 @@ int run_dem_mpi(const DemMpiRequest& request) {
       }
       const int axis = request.axis.empty() ? -1 : dem::parse_axis(request.axis);
       if (!request.json_out.empty() && rank == 0) prepare_output_file(request.json_out);
+      if (!request.checkpoint.empty() && rank == 0) prepare_output_file(request.checkpoint);
       config = dem::read_dem_config(request.config);
       settings = config.settings;
       settings.threads = resolve_threads(request.threads);
@@ -131,6 +133,10 @@ int run_dem_mpi(const DemMpiRequest& request) {
       mpi::abort_all(comm, e.what(), 4);
     }
     const double wall = omp_get_wtime() - t0;
+    if (!request.checkpoint.empty()) {
+      dem::mpi::write_checkpoint(comm, *engine, halo, 0, request.checkpoint);
+      if (rank == 0) fmt::print("wrote {}\n", request.checkpoint);
+    }
     discharged = halo.sum_over_ranks(engine->removed_mass());
     const double particle_steps =
         halo.sum_over_ranks(static_cast<double>(engine->particle_steps()));

@@ -43,6 +43,17 @@ TEST(DemMpiCli, ARunOnThreeRanksCountsEveryParticleOnce) {
   EXPECT_GT(doc["particle_steps_per_s"].get<double>(), 0.0);
 }
 
+TEST(DemMpiCli, ACheckpointOfTwoRanksRestartsInOneProcess) {
+  TempDir dir;
+  const auto run = run_command(mpiexec(2) + contactlab_exe() + " dem run " + drop_box() +
+                               " --mpi --threads 1 --steps 300 --checkpoint " + dir.file("c.chk"));
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  const auto next = run_command(contactlab_exe() + " dem run " + drop_box() +
+                                " --threads 1 --steps 100 --restart " + dir.file("c.chk"));
+  ASSERT_EQ(next.exit_code, 0) << next.output;
+  EXPECT_NE(next.output.find("steps 300 -> 400"), std::string::npos) << next.output;
+}
+
 TEST(DemMpiCli, WhatMpiDoesNotSupportYetIsOneMessageOnEveryRankCount) {
   TempDir dir;
   const auto start = std::chrono::steady_clock::now();

@@ -6,16 +6,21 @@
 // compares.
 #include <gtest/gtest.h>
 #include <mpi.h>
+#include <unistd.h>
 
 #include <bit>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <cstring>
 #include <limits>
+#include <string>
 #include <vector>
 
+#include "contactlab/dem/checkpoint.hpp"
 #include "contactlab/dem/engine.hpp"
 #include "contactlab/dem/slabs.hpp"
+#include "contactlab/dem_mpi/checkpoint.hpp"
 #include "contactlab/dem_mpi/halo_exchange.hpp"
 #include "contactlab/mpi/runtime.hpp"
 #include "dem_support.hpp"
@@ -166,6 +171,44 @@ TEST_P(DemMpiAxes, ASinkDrainsTheSameParticlesAndMassWhileTheSlabsAreRebalanced)
     EXPECT_DOUBLE_EQ(one.removed_mass, many.removed_mass);
     EXPECT_EQ(one.run_particles, many.run_particles);
     expect_same_bits(one.state, many.state);
+  }
+}
+
+// A checkpoint the ranks write together is the one one process would have written: one
+// process restores it and continues to the same bits as the one-process run that never stopped.
+TEST_P(DemMpiAxes, ACheckpointRestoresInOneProcessAndContinuesBitIdentically) {
+  auto [settings, particles] = small_bed(150);
+  constexpr std::uint64_t kBefore = 2000, kAfter = 1000;
+  std::string path;
+  if (rank() == 0) {
+    path = ::testing::TempDir() + "/contactlab_dem_mpi_" + std::to_string(::getpid()) + ".chk";
+  }
+  int length = static_cast<int>(path.size());
+  MPI_Bcast(&length, 1, MPI_INT, 0, MPI_COMM_WORLD);
+  path.resize(static_cast<std::size_t>(length));
+  MPI_Bcast(path.data(), length, MPI_CHAR, 0, MPI_COMM_WORLD);
+  {
+    const std::vector<double> work(particles.size(), 1.0);
+    const Slabs slabs = balance_slabs(particles, work, ranks(), GetParam(), settings.domain);
+    EngineSettings mine = settings;
+    mine.skin = 0.1 * 2e-3;
+    HaloExchange halo(MPI_COMM_WORLD, slabs, 2e-3 + mine.skin);
+    Engine engine(mine, slab_particles(slabs, particles, rank()), &halo);
+    engine.run_steps(kBefore);
+    contactlab::dem::mpi::write_checkpoint(MPI_COMM_WORLD, engine, halo, 7, path);
+  }
+  if (rank() == 0) {
+    EngineSettings one = settings;
+    one.skin = 0.1 * 2e-3;
+    Engine straight(one, particles);
+    straight.run_steps(kBefore + kAfter);
+    Engine restored(one, particles);
+    EXPECT_EQ(read_checkpoint(restored, path), 7);
+    EXPECT_EQ(restored.step_count(), kBefore);
+    restored.run_steps(kAfter);
+    expect_same_bits(fields_by_id(straight.particles(), particles.size()),
+                     fields_by_id(restored.particles(), particles.size()));
+    std::remove(path.c_str());
   }
 }
 

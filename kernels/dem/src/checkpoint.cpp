@@ -57,13 +57,18 @@ class Reader {
 }  // namespace
 
 void write_checkpoint(const Engine& engine, int frames, const std::string& path) {
+  write_checkpoint(engine.state(), engine.particles(), engine.pairs(), frames, path);
+}
+
+void write_checkpoint(const Engine::State& state, const Particles& particles,
+                      const PairList& pairs, int frames, const std::string& path) {
+  const Engine::State& s = state;
+  const Particles& p = particles;
+  const PairList& q = pairs;
   write_file_atomically(
       path,
       [&](std::ostream& out) {
         out.write(kMagic, sizeof kMagic);
-        const Particles& p = engine.particles();
-        const PairList& q = engine.pairs();
-        const Engine::State s = engine.state();
         put<std::uint64_t>(out, p.size());
         put<std::uint64_t>(out, p.wall_spring.size());
         put<std::uint64_t>(out, q.size());

@@ -11,6 +11,10 @@ namespace contactlab::dem {
 
 // `frames`: the output frames written so far (the restarted run continues the numbering).
 void write_checkpoint(const Engine& engine, int frames, const std::string& path);
+// The same file from its parts: an engine's state, its particles in their order and its list
+// with history (what a decomposed run assembles on one rank: dem_mpi/checkpoint.hpp).
+void write_checkpoint(const Engine::State& state, const Particles& particles, const PairList& pairs,
+                      int frames, const std::string& path);
 
 // Restores `engine` (built from the same config) from `path`; returns the frame count. Throws
 // InputError for a missing, truncated or foreign file, or one with more particles than the
