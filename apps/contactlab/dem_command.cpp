@@ -155,12 +155,12 @@ struct DemRunCommand {
     request.rebalance_margin = rebalance_margin_;
     request.json_out = json_out_;
     request.checkpoint = checkpoint_;
+    request.restart = restart_;
     request.command_line = command_line_;
     request.check_options = [this] {
       const std::pair<bool, const char*> unsupported[] = {{!vtk_dir_.empty(), "--vtk"},
                                                           {!png_dir_.empty(), "--png"},
                                                           {!discharge_.empty(), "--discharge"},
-                                                          {!restart_.empty(), "--restart"},
                                                           {!variant_.empty(), "--variant"},
                                                           {retune_, "--retune"},
                                                           {!variant_log_.empty(), "--variant-log"}};

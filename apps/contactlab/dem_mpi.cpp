@@ -9,9 +9,11 @@
 #include <limits>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <vector>
 
 #include "cli_shared.hpp"
+#include "contactlab/dem/checkpoint.hpp"
 #include "contactlab/dem/config.hpp"
 #include "contactlab/dem/engine.hpp"
 #include "contactlab/dem/slabs.hpp"
@@ -44,12 +46,6 @@ std::vector<RankAccount> gather_accounts(MPI_Comm comm, const RankAccount& mine)
   return all;
 }
 
-// The runs' steps, as `dem run` counts them: --steps N, or to the config's end.
-std::uint64_t steps_to_run(const DemMpiRequest& request, const dem::DemConfig& config) {
-  if (request.steps > 0) return request.steps;
-  return static_cast<std::uint64_t>(std::llround(config.end_time_s / config.settings.dt_s));
-}
-
 }  // namespace
 
 int run_dem_mpi(const DemMpiRequest& request) {
@@ -62,6 +58,9 @@ int run_dem_mpi(const DemMpiRequest& request) {
     dem::Particles own;
     dem::SlabPlan plan;
     std::size_t particles = 0;
+    dem::CarriedSprings springs;               // --restart: the checkpoint's
+    std::optional<dem::Engine::State> resume;  // --restart: its time and counters
+    int frames = 0;
     // Every rank reads the config and plans the same slabs (O(N) each at the start), then
     // keeps its own particles.
     mpi::run_checked(comm, [&] {
@@ -83,36 +82,62 @@ int run_dem_mpi(const DemMpiRequest& request) {
           !(settings.sink_below_z > -std::numeric_limits<double>::infinity())) {
         throw InputError("--until-discharged needs a config with a sink");
       }
-      const dem::Particles all = dem::make_particles(config);
+      dem::Particles all = dem::make_particles(config);
+      if (!request.restart.empty()) {
+        // A checkpoint of any run: its particles and list weigh the slabs, its springs are
+        // carried into each rank's first list, its counters go on (rank 0 holds the sums).
+        all.set_wall_count(settings.walls.size());
+        dem::CheckpointParts parts = dem::read_checkpoint_parts(request.restart, all);
+        all = std::move(parts.particles);
+        plan = dem::plan_slabs(all, parts.pairs, settings, ranks, axis);
+        dem::collect_springs(all, parts.pairs, springs);
+        resume = parts.state;
+        frames = parts.frames;
+        if (rank != 0) {
+          resume->large_overlaps = 0;
+          resume->initial_energy = 0.0;
+          resume->removed_count = 0;
+          resume->removed_mass = 0.0;
+        }
+      } else {
+        plan = dem::plan_slabs(all, settings, ranks, axis);
+      }
       particles = all.size();
-      plan = dem::plan_slabs(all, settings, ranks, axis);
       own = dem::slab_particles(plan.slabs, all, rank);
     });
     settings.skin = plan.skin;  // every rank the same, from all the particles
     dem::mpi::HaloExchange halo(comm, plan.slabs, plan.halo, request.rebalance_margin);
+    halo.seed_springs(std::move(springs));
     // From here every failure may leave other ranks in a collective: it aborts them all.
     std::unique_ptr<dem::Engine> engine;
     try {
-      engine = std::make_unique<dem::Engine>(settings, std::move(own), &halo);
+      engine = std::make_unique<dem::Engine>(settings, std::move(own), &halo,
+                                             resume ? &*resume : nullptr);
     } catch (const std::exception& e) {
       mpi::abort_all(comm, e.what(), 2);
     }
-    const std::uint64_t total_steps = steps_to_run(request, config);
+    // --steps N from where the run stands, or to the config's end.
+    const std::uint64_t total_steps =
+        engine->step_count() +
+        (request.steps > 0
+             ? request.steps
+             : static_cast<std::uint64_t>(std::llround(
+                   std::max(0.0, config.end_time_s - engine->time_s()) / settings.dt_s)));
     const double start_mass = halo.sum_over_ranks([&] {
       double m = 0.0;
       for (std::size_t a = 0; a < engine->particles().size(); ++a) {
         if (!halo.is_ghost(a)) m += engine->particles().mass[a];
       }
       return m;
-    }());
+    }()) + halo.sum_over_ranks(engine->removed_mass());  // a restart's sink went before
     const double stop_mass = request.until_discharged * start_mass;
     if (rank == 0) {
       fmt::print(
           "dem run '{}' --mpi: {} particles over {} ranks x {} threads, slabs along {}{} "
-          "(imbalance {:.3f} at the start), halo {:.4g} m; dt = {:.6g} s, {} steps\n",
+          "(imbalance {:.3f} at the start), halo {:.4g} m; dt = {:.6g} s, steps {} -> {}\n",
           config.name, particles, ranks, settings.threads, dem::axis_name(plan.slabs.axis),
           plan.slabs.periodic ? " (periodic)" : "", plan.load.imbalance, plan.halo, settings.dt_s,
-          total_steps);
+          engine->step_count(), total_steps);
     }
     // Batches of at most 1000 steps; with --until-discharged each ends at a rebuild (the only
     // step the sink takes particles), and the discharged mass is summed over the ranks there.
@@ -134,7 +159,7 @@ int run_dem_mpi(const DemMpiRequest& request) {
     }
     const double wall = omp_get_wtime() - t0;
     if (!request.checkpoint.empty()) {
-      dem::mpi::write_checkpoint(comm, *engine, halo, 0, request.checkpoint);
+      dem::mpi::write_checkpoint(comm, *engine, halo, frames, request.checkpoint);
       if (rank == 0) fmt::print("wrote {}\n", request.checkpoint);
     }
     discharged = halo.sum_over_ranks(engine->removed_mass());

@@ -16,7 +16,9 @@ struct DemMpiRequest {
   std::string axis;               // empty: the longest
   double rebalance_margin = 0.1;  // re-cut the slabs when the largest work exceeds the mean by it
   std::string json_out;
-  std::string checkpoint;  // written at the end: the file one process would have written
+  std::string checkpoint;
+  std::string restart;  // a checkpoint of the config, from any run (one process or any ranks)  //
+                        // written at the end: the file one process would have written
   std::string command_line;
   std::function<void()> check_options;  // run on every rank; throws InputError
 };

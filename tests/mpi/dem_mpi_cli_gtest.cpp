@@ -54,6 +54,25 @@ TEST(DemMpiCli, ACheckpointOfTwoRanksRestartsInOneProcess) {
   EXPECT_NE(next.output.find("steps 300 -> 400"), std::string::npos) << next.output;
 }
 
+TEST(DemMpiCli, ACheckpointOfOneProcessRestartsOnThreeRanks) {
+  TempDir dir;
+  const auto run = run_command(contactlab_exe() + " dem run " + drop_box() +
+                               " --threads 1 --steps 300 --checkpoint " + dir.file("c.chk"));
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  const auto next = run_command(mpiexec(3) + contactlab_exe() + " dem run " + drop_box() +
+                                " --mpi --threads 1 --steps 100 --restart " + dir.file("c.chk") +
+                                " --json " + dir.file("r.json"));
+  ASSERT_EQ(next.exit_code, 0) << next.output;
+  EXPECT_NE(next.output.find("steps 300 -> 400"), std::string::npos) << next.output;
+  const nlohmann::json doc = read_json(dir.file("r.json"));
+  EXPECT_EQ(doc["steps"], 400);
+  const auto bad = run_command(mpiexec(2) + contactlab_exe() + " dem run " + drop_box() +
+                               " --mpi --steps 10 --restart " + drop_box());
+  EXPECT_NE(bad.exit_code, 0);
+  EXPECT_EQ(count_of(bad.output, "contactlab: error:"), 1) << bad.output;
+  EXPECT_NE(bad.output.find("not a contactlab DEM checkpoint"), std::string::npos) << bad.output;
+}
+
 TEST(DemMpiCli, WhatMpiDoesNotSupportYetIsOneMessageOnEveryRankCount) {
   TempDir dir;
   const auto start = std::chrono::steady_clock::now();

@@ -1,6 +1,7 @@
 // Binary checkpoints: a magic word, counts, the engine's State, then raw arrays.
 #include "contactlab/dem/checkpoint.hpp"
 
+#include <algorithm>
 #include <cstdint>
 #include <cstring>
 #include <fstream>
@@ -60,8 +61,8 @@ void write_checkpoint(const Engine& engine, int frames, const std::string& path)
   write_checkpoint(engine.state(), engine.particles(), engine.pairs(), frames, path);
 }
 
-void write_checkpoint(const Engine::State& state, const Particles& particles,
-                      const PairList& pairs, int frames, const std::string& path) {
+void write_checkpoint(const Engine::State& state, const Particles& particles, const PairList& pairs,
+                      int frames, const std::string& path) {
   const Engine::State& s = state;
   const Particles& p = particles;
   const PairList& q = pairs;
@@ -91,7 +92,7 @@ void write_checkpoint(const Engine::State& state, const Particles& particles,
       true);
 }
 
-int read_checkpoint(Engine& engine, const std::string& path) {
+CheckpointParts read_checkpoint_parts(const std::string& path, const Particles& config) {
   std::ifstream file(path, std::ios::binary);
   if (!file) throw InputError("cannot open checkpoint '" + path + "'");
   char magic[8];
@@ -107,11 +108,11 @@ int read_checkpoint(Engine& engine, const std::string& path) {
   const auto walls3 = in.get<std::uint64_t>();
   const auto pairs = in.get<std::uint64_t>();
   // The sink may have removed particles: a checkpoint holds at most the config's.
-  if (n > engine.particles().size() || walls3 != engine.particles().wall_spring.size()) {
+  if (n > config.size() || walls3 != config.wall_spring.size()) {
     throw InputError(path + ": checkpoint has " + std::to_string(n) + " particles and " +
                      std::to_string(walls3 / 3) + " walls, the config " +
-                     std::to_string(engine.particles().size()) + " and " +
-                     std::to_string(engine.particles().wall_spring.size() / 3));
+                     std::to_string(config.size()) + " and " +
+                     std::to_string(config.wall_spring.size() / 3));
   }
   const int frames = in.get<std::int32_t>();
   Engine::State s;
@@ -124,7 +125,7 @@ int read_checkpoint(Engine& engine, const std::string& path) {
     s.removed_count = in.get<std::uint64_t>();
     s.removed_mass = in.get<double>();
   }
-  Particles p = engine.particles();
+  Particles p = config;
   p.for_each_array([&](auto& v) {
     in.array(v, n);
     if (version < '3' && static_cast<const void*>(&v) == &p.wz) {  // then pvx .. pwz, unused
@@ -132,7 +133,9 @@ int read_checkpoint(Engine& engine, const std::string& path) {
       for (int k = 0; k < 6; ++k) in.array(synchronised_velocity, n);
     }
   });
-  std::vector<std::uint8_t> seen(engine.id_capacity(), 0);
+  std::uint32_t capacity = 0;
+  for (const std::uint32_t id : config.id) capacity = std::max(capacity, id + 1);
+  std::vector<std::uint8_t> seen(capacity, 0);
   for (std::uint32_t id : p.id) {
     if (id >= seen.size() || seen[id] != 0) {
       throw InputError(path + ": checkpoint particle ids do not match the config");
@@ -151,8 +154,13 @@ int read_checkpoint(Engine& engine, const std::string& path) {
       throw InputError(path + ": checkpoint pair list is corrupt");
     }
   }
-  engine.restore(s, std::move(p), std::move(q));
-  return frames;
+  return {frames, s, std::move(p), std::move(q)};
+}
+
+int read_checkpoint(Engine& engine, const std::string& path) {
+  CheckpointParts parts = read_checkpoint_parts(path, engine.particles());
+  engine.restore(parts.state, std::move(parts.particles), std::move(parts.pairs));
+  return parts.frames;
 }
 
 }  // namespace contactlab::dem

@@ -30,7 +30,7 @@ void Engine::drift_on<StepIsa::kAvx2>(double& max_disp_sq, std::uint32_t& bad);
 template <>
 void Engine::drift_on<StepIsa::kAvx512>(double& max_disp_sq, std::uint32_t& bad);
 
-Engine::Engine(EngineSettings settings, Particles particles, Halo* halo)
+Engine::Engine(EngineSettings settings, Particles particles, Halo* halo, const State* resume)
     : settings_(std::move(settings)),
       halo_(halo),
       coefficients_(pair_coefficients(settings_.law)),
@@ -60,8 +60,18 @@ Engine::Engine(EngineSettings settings, Particles particles, Halo* halo)
                     "(2/w0 for the stiffest pair; recommended t_c/50 = {:.6g} s)",
                     settings_.dt_s, stable_dt_, contact_time(coefficients_, 0.5 * min_m) / 50.0));
   }
-  p.set_wall_count(settings_.walls.size());
+  if (resume == nullptr) {
+    p.set_wall_count(settings_.walls.size());
+  } else {
+    if (p.wall_spring.size() != 3 * settings_.walls.size()) {
+      throw InputError("the resumed particles' wall springs do not match the config's walls");
+    }
+    set_counters(*resume);  // before the build: the walls' reach at the resumed time
+  }
   rebuild();
+  // Resumed: the particles carry their forces, springs and velocities as the checkpoint saved
+  // them; computing the forces again would advance every spring by one more step.
+  if (resume != nullptr) return;
   // Initial overlaps: pairs and walls.
   const double tol = settings_.initial_overlap_tolerance;
   for (std::size_t k = 0; k < pairs_.size(); ++k) {

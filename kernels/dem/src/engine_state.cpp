@@ -63,7 +63,7 @@ Energies Engine::local_energies() const {
   return e;
 }
 
-void Engine::restore(const State& state, Particles particles, PairList pairs) {
+void Engine::set_counters(const State& state) {
   drifted_ = false;  // restored whole: no step is half done
   time_s_ = state.time_s;
   base_time_s_ = state.time_s;
@@ -74,6 +74,10 @@ void Engine::restore(const State& state, Particles particles, PairList pairs) {
   initial_energy_ = state.initial_energy;
   removed_count_ = state.removed_count;
   removed_mass_ = state.removed_mass;
+}
+
+void Engine::restore(const State& state, Particles particles, PairList pairs) {
+  set_counters(state);
   particles_ = std::move(particles);
   const auto shift = pairs_.shift;
   pairs_ = std::move(pairs);

@@ -175,18 +175,27 @@ SlabPlan plan_slabs(const Particles& particles, const EngineSettings& settings, 
   if (particles.size() == 0) throw InputError("no particles");
   double max_r = 0.0;
   for (const double r : particles.radius) max_r = std::max(max_r, r);
-  SlabPlan plan;
-  plan.skin = settings.skin > 0.0 ? settings.skin : 0.1 * 2.0 * max_r;
-  plan.halo = 2.0 * max_r + plan.skin;
+  const double skin = settings.skin > 0.0 ? settings.skin : 0.1 * 2.0 * max_r;
   Particles ordered = particles;  // the list reorders them
   PairList pairs;
   NeighborBuilder builder;
-  builder.rebuild(ordered, pairs, settings.domain, plan.skin, false, settings.threads);
+  builder.rebuild(ordered, pairs, settings.domain, skin, false, settings.threads);
+  return plan_slabs(ordered, pairs, settings, ranks, axis);
+}
+
+SlabPlan plan_slabs(const Particles& particles, const PairList& pairs,
+                    const EngineSettings& settings, int ranks, int axis) {
+  if (particles.size() == 0) throw InputError("no particles");
+  double max_r = 0.0;
+  for (const double r : particles.radius) max_r = std::max(max_r, r);
+  SlabPlan plan;
+  plan.skin = settings.skin > 0.0 ? settings.skin : 0.1 * 2.0 * max_r;
+  plan.halo = 2.0 * max_r + plan.skin;
   plan.pairs = pairs.size();
-  const std::vector<double> work = particle_work(ordered, pairs);
-  if (axis < 0) axis = longest_axis(ordered, settings.domain);
-  plan.slabs = balance_slabs(ordered, work, ranks, axis, settings.domain);
-  plan.load = slab_load(plan.slabs, ordered, work, plan.halo);
+  const std::vector<double> work = particle_work(particles, pairs);
+  if (axis < 0) axis = longest_axis(particles, settings.domain);
+  plan.slabs = balance_slabs(particles, work, ranks, axis, settings.domain);
+  plan.load = slab_load(plan.slabs, particles, work, plan.halo);
   return plan;
 }
 

@@ -91,6 +91,11 @@ Box HaloExchange::box_over_ranks(const Box& local) {
 
 void HaloExchange::drop_ghosts(Particles& particles, PairList& pairs, CarriedSprings& carried) {
   collect_springs(particles, pairs, carried);
+  if (seeds_.size() > 0) {
+    carried.keys.insert(carried.keys.end(), seeds_.keys.begin(), seeds_.keys.end());
+    carried.springs.insert(carried.springs.end(), seeds_.springs.begin(), seeds_.springs.end());
+    seeds_.clear();
+  }
   // The owned particles' work as the list that ends here weighs it (slabs.hpp's measure), by
   // id: the sink may take some before the re-balancing reads it.
   std::vector<double> work(particles.size(), 1.0);

@@ -21,4 +21,15 @@ void write_checkpoint(const Engine::State& state, const Particles& particles, co
 // config (fewer is fine: the sink removes some), ids the config lacks, or another wall count.
 int read_checkpoint(Engine& engine, const std::string& path);
 
+// What a checkpoint holds, checked against the config's particles (`config`, their wall springs
+// sized: as read_checkpoint checks them): for a run that starts from it other than by
+// Engine::restore (a decomposed run splits it over its processes).
+struct CheckpointParts {
+  int frames = 0;
+  Engine::State state;
+  Particles particles;
+  PairList pairs;
+};
+CheckpointParts read_checkpoint_parts(const std::string& path, const Particles& config);
+
 }  // namespace contactlab::dem

@@ -110,7 +110,14 @@ class Engine {
   // With a halo (halo.hpp, not owned, outliving the engine), `particles` are this process's part
   // of a decomposed run (possibly none): every rebuild, force evaluation and energy is agreed
   // with the other processes through it, so every call below that steps or sums is collective.
-  Engine(EngineSettings settings, Particles particles, Halo* halo = nullptr);
+  struct State;  // a checkpoint's time and counters (below)
+  // With `resume`, the run continues from a checkpoint's state (a decomposed run restarting):
+  // the particles carry their velocities, forces and wall springs, the halo the pairs' springs
+  // (HaloExchange::seed_springs); no overlap check, no force evaluation, the counters the
+  // state's. Unlike restore(), the start rebuilds the list (the order and the next rebuilds
+  // then differ from the run that wrote the checkpoint: the same physics, other roundings).
+  Engine(EngineSettings settings, Particles particles, Halo* halo = nullptr,
+         const State* resume = nullptr);
 
   void step();
   // Where a batch of run_steps may end early: kAtRebuild ends it after a step that rebuilt
@@ -178,7 +185,8 @@ class Engine {
 
  private:
   void rebuild();
-  Energies local_energies() const;  // this process's particles (dissipated not set)
+  void set_counters(const State& state);  // time, step and the counters (restore, resume)
+  Energies local_energies() const;        // this process's particles (dissipated not set)
   // sink.cpp: removes the particles below the sink level (particle arrays and the old pair
   // list, renumbered), and indexes the stable ids of the particles left.
   void remove_sunk_particles();

@@ -80,5 +80,8 @@ struct SlabPlan {
 };
 SlabPlan plan_slabs(const Particles& particles, const EngineSettings& settings, int ranks,
                     int axis = -1);
+// The same from a list already built over the particles (a checkpoint's).
+SlabPlan plan_slabs(const Particles& particles, const PairList& pairs,
+                    const EngineSettings& settings, int ranks, int axis = -1);
 
 }  // namespace contactlab::dem

@@ -53,6 +53,10 @@ class HaloExchange final : public Halo {
   std::size_t owned_count() const override { return owned_; }
   bool exchanges_ghosts() const override { return exchanges_; }
 
+  // Springs the first rebuild carries besides the list's (a run resumed from a checkpoint:
+  // the engine's list is empty then).
+  void seed_springs(CarriedSprings springs) { seeds_ = std::move(springs); }
+
   const Slabs& slabs() const { return slabs_; }
   const HaloStats& stats() const { return stats_; }
   int rank() const { return rank_; }
@@ -77,6 +81,7 @@ class HaloExchange final : public Halo {
   std::vector<std::vector<double>> send_buffer_, recv_buffer_;
   std::vector<MPI_Request> requests_;
   HaloStats stats_;
+  CarriedSprings seeds_;
 };
 
 }  // namespace contactlab::dem::mpi
