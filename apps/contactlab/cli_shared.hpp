@@ -50,6 +50,9 @@ Subcommand add_probe_command(CLI::App& app, const std::string& command_line);
 Subcommand add_dem_command(CLI::App& app, const std::string& command_line);
 // `dem variants`, `dem profile` and `dem partition`, under the dem command (dem_study_command.cpp).
 std::vector<Subcommand> add_dem_study_commands(CLI::App& dem_app, const std::string& command_line);
+// `emulate dem-mpi`, under the emulate command (emulate_dem_mpi_command.cpp): sets `run`.
+void add_emulate_dem_mpi_command(CLI::App& emulate_app, const std::string& command_line,
+                                 std::function<int()>& run);
 // `dem partition`, under the dem command (dem_partition_command.cpp).
 Subcommand add_dem_partition_command(CLI::App& dem_app, const std::string& command_line);
 // `dem profile`, under the dem command (dem_profile_command.cpp).

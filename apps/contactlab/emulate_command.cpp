@@ -459,7 +459,13 @@ Subcommand add_emulate_command(CLI::App& app, const std::string& command_line) {
   m->add_flag("!--no-slowest-rank", mpi->measure_slowest_,
               "do not time the pure-MPI series' slowest rank alone at each process count");
   add_output_options(*m, mpi->json_out_, mpi->cache_file_, mpi->recalibrate_);
-  return {sub, [=] { return (*t) ? threads->run() : mpi->run(); }};
+  std::function<int()> dem_mpi;
+  add_emulate_dem_mpi_command(*sub, command_line, dem_mpi);
+  return {sub, [=] {
+            if (*t) return threads->run();
+            if (*m) return mpi->run();
+            return dem_mpi();
+          }};
 }
 
 }  // namespace contactlab::cli

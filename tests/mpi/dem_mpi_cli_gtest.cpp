@@ -116,5 +116,27 @@ TEST(DemPartitionCli, TheSlabsHoldEveryParticleOnce) {
   EXPECT_NE(bad.output.find("--ranks must be >= 1"), std::string::npos) << bad.output;
 }
 
+TEST(DemMpiEmulationCli, PredictsEveryRankCountAndSaysSo) {
+  TempDir dir;
+  const auto run = run_command(contactlab_exe() + " emulate dem-mpi " + drop_box() +
+                               " --ranks 1,2,4,1024 --steps 20 --json " + dir.file("e.json"));
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  EXPECT_NE(run.output.find("PREDICTED"), std::string::npos) << run.output;
+  const nlohmann::json doc = read_json(dir.file("e.json"));
+  EXPECT_EQ(doc["kind"], "contactlab-dem-mpi-emulation");
+  EXPECT_EQ(doc["predicted"], true);
+  ASSERT_EQ(doc["points"].size(), 4u);
+  EXPECT_DOUBLE_EQ(doc["points"][0]["strong"]["speedup"].get<double>(), 1.0);
+  // 216 spheres in a small periodic box: every rank holds most of them as ghosts, and the
+  // messages outweigh a 10 us step; the prediction says so (below 1), which is right here.
+  EXPECT_GT(doc["points"][1]["strong"]["speedup"].get<double>(), 0.0);
+  EXPECT_LT(doc["points"][3]["strong"]["speedup"].get<double>(), 1.0);
+  EXPECT_GT(doc["calibration"]["seconds_per_work"].get<double>(), 0.0);
+  const auto bad =
+      run_command(contactlab_exe() + " emulate dem-mpi " + drop_box() + " --ranks 1,0 --steps 5");
+  EXPECT_NE(bad.exit_code, 0);
+  EXPECT_NE(bad.output.find("--ranks"), std::string::npos) << bad.output;
+}
+
 }  // namespace
 }  // namespace contactlab::test
