@@ -92,6 +92,33 @@ TEST(DemMpiCli, AMissingConfigEndsEveryRankWithOneMessage) {
   EXPECT_EQ(count_of(run.output, "contactlab: error:"), 1) << run.output;
 }
 
+// One rank's particle becomes unstable in the first step (it moves 0.4 mm, more than skin/2):
+// every rank ends, no hang, and each rank that holds it (its owner, and a rank holding it as a
+// ghost sees the same drift) names it in the same line.
+TEST(DemMpiCli, AnUnstableParticleOnOneRankEndsEveryRankWithItsMessage) {
+  TempDir dir;
+  std::ifstream in(drop_box());
+  nlohmann::json config = nlohmann::json::parse(in);
+  config["particles"] = nlohmann::json::array({{{"position", {0.014, 0.008, 0.05}},
+                                                {"radius", 0.0005},
+                                                {"material", "glass"},
+                                                {"velocity", {0.0, 0.0, -200.0}}}});
+  const std::string path = dir.file("unstable.json");
+  std::ofstream(path) << config.dump();
+  const auto start = std::chrono::steady_clock::now();
+  const auto run = run_command(mpiexec(2) + contactlab_exe() + " dem run " + path +
+                               " --mpi --axis x --threads 1 --steps 50");
+  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 30.0);
+  EXPECT_NE(run.exit_code, 0) << run.output;
+  const int lines = count_of(run.output, "contactlab: error");
+  EXPECT_GE(lines, 1) << run.output;
+  EXPECT_EQ(count_of(run.output,
+                     "more than skin/2 = 0.0001 m at step 1 (t = 2e-06 s): particle 0 "
+                     "at (0.014, 0.008, 0.0496) m"),
+            lines)
+      << run.output;
+}
+
 TEST(DemMpiCli, AxisWithoutMpiIsRefused) {
   const auto run = run_command(contactlab_exe() + " dem run " + drop_box() + " --axis z");
   EXPECT_NE(run.exit_code, 0);
