@@ -15,18 +15,15 @@
 #include "contactlab/dem/checkpoint.hpp"
 #include "contactlab/dem/config.hpp"
 #include "contactlab/dem/discharge.hpp"
-#include "contactlab/dem/output.hpp"
-#include "contactlab/tuner_dem/force_model.hpp"
-#include "dem_mpi.hpp"
-#include "dem_start.hpp"
-#ifdef CONTACTLAB_HAVE_CAIRO
-#include "contactlab/dem/picture.hpp"
-#endif
 #include "contactlab/dem/timestep_study.hpp"
 #include "contactlab/dem/validation.hpp"
 #include "contactlab/kernels/atomic_file.hpp"
 #include "contactlab/kernels/detector.hpp"
 #include "contactlab/kernels/error.hpp"
+#include "contactlab/tuner_dem/force_model.hpp"
+#include "dem_mpi.hpp"
+#include "dem_outputs.hpp"
+#include "dem_start.hpp"
 
 namespace contactlab::cli {
 namespace {
@@ -138,13 +135,10 @@ struct DemRunCommand {
   std::string json_out_;
   std::string command_line_;
 
-  static std::string in_dir(std::string dir, const std::string& file) {
-    if (!dir.empty() && dir.back() != '/') dir += '/';
-    return dir + file;
-  }
+  DemOutputOptions output_options() const { return {vtk_dir_, png_dir_, discharge_, checkpoint_}; }
 
-  // --mpi: the run decomposed over the processes (dem_mpi.cpp); what it does not do yet is
-  // refused by name.
+  // --mpi: the run decomposed over the processes (dem_mpi.cpp). The force model behind
+  // --variant auto is calibrated on one process's run: it is refused by name.
   int run_mpi() const {
     DemMpiRequest request;
     request.config = config_;
@@ -153,19 +147,21 @@ struct DemRunCommand {
     request.until_discharged = until_discharged_;
     request.axis = axis_;
     request.rebalance_margin = rebalance_margin_;
+    request.variant = variant_;
     request.json_out = json_out_;
-    request.checkpoint = checkpoint_;
+    request.outputs = output_options();
     request.restart = restart_;
     request.command_line = command_line_;
     request.check_options = [this] {
-      const std::pair<bool, const char*> unsupported[] = {{!vtk_dir_.empty(), "--vtk"},
-                                                          {!png_dir_.empty(), "--png"},
-                                                          {!discharge_.empty(), "--discharge"},
-                                                          {!variant_.empty(), "--variant"},
+      const std::pair<bool, const char*> unsupported[] = {{variant_ == "auto", "--variant auto"},
                                                           {retune_, "--retune"},
                                                           {!variant_log_.empty(), "--variant-log"}};
       for (const auto& [given, name] : unsupported) {
-        if (given) throw InputError(std::string(name) + " is not available with --mpi yet (#49)");
+        if (given) {
+          throw InputError(std::string(name) +
+                           " is not available with --mpi (the force model is calibrated in one "
+                           "process): give --variant a name");
+        }
       }
     };
 #ifdef CONTACTLAB_HAVE_MPI
@@ -202,32 +198,8 @@ struct DemRunCommand {
     }
     // Output folders are made, and output paths checked, before any work.
     if (!variant_log_.empty()) prepare_output_file(variant_log_);
-    std::unique_ptr<dem::FrameWriter> writer;
-    if (!vtk_dir_.empty()) writer = std::make_unique<dem::FrameWriter>(vtk_dir_, config.name);
     dem::Particles initial = dem::make_particles(config);
-#ifdef CONTACTLAB_HAVE_CAIRO
-    std::unique_ptr<dem::SectionPainter> painter;
-    if (!png_dir_.empty()) {
-      painter = std::make_unique<dem::SectionPainter>(
-          png_dir_, config.name, dem::section_view_for(settings, initial),
-          dem::height_layers(initial, dem::SectionView{}.layers));
-    }
-#else
-    if (!png_dir_.empty()) {
-      throw InputError(
-          "--png: this contactlab was built without cairo (install libcairo2-dev "
-          "and rebuild)");
-    }
-#endif
-    std::string discharge = discharge_;
-    if (discharge.empty() && has_sink && (!vtk_dir_.empty() || !png_dir_.empty())) {
-      discharge = in_dir(vtk_dir_.empty() ? png_dir_ : vtk_dir_, config.name + "_discharge.csv");
-    }
-    std::unique_ptr<dem::DischargeLog> log;
-    if (!discharge.empty()) log = std::make_unique<dem::DischargeLog>(discharge);
-    std::string checkpoint = checkpoint_;
-    if (checkpoint.empty() && !vtk_dir_.empty()) checkpoint = in_dir(vtk_dir_, "last.chk");
-    if (!checkpoint.empty()) prepare_output_file(checkpoint);
+    RunOutputs outputs(output_options(), config, initial);
     // --variant auto: the force model calibrated on this run's start (a few short runs from
     // copies of it), then the variant it predicts fastest; --retune re-prices at each rebuild.
     std::unique_ptr<VariantTuning> tuning;
@@ -241,11 +213,9 @@ struct DemRunCommand {
           retune_margin_);
     }
     dem::Engine engine(settings, std::move(initial));
-    int frame = 0;
     if (!restart_.empty()) {
-      frame = dem::read_checkpoint(engine, restart_);
-      if (writer) writer->continue_series(engine.time_s(), frame);
-      if (log) log->continue_series(engine.time_s());
+      const int frames = dem::read_checkpoint(engine, restart_);
+      outputs.continue_series(engine.time_s(), frames);
     }
     const double dt = settings.dt_s;
     // Steps to the config's end from where the (restarted) run stands (a restart may change
@@ -265,16 +235,8 @@ struct DemRunCommand {
         config.name, engine.particles().size(), settings.walls.size(), dt, engine.stable_dt(),
         engine.step_count(), total_steps, settings.threads,
         has_sink ? fmt::format(", sink below z = {:.6g} m", settings.sink_below_z) : "");
-    auto output = [&] {
-      if (writer) writer->write(engine, frame);
-#ifdef CONTACTLAB_HAVE_CAIRO
-      if (painter) painter->write(engine, frame);
-      if (writer || painter) ++frame;
-#else
-      if (writer) ++frame;
-#endif
-      if (log) log->record(engine);
-    };
+    const std::string& checkpoint = outputs.checkpoint();
+    auto output = [&] { outputs.write(engine.snapshot()); };
     if (engine.step_count() == 0) output();
     if (tuning) tuning->start(engine);
     // --until-discharged F: the mass the sink must have taken (of all the run started with).
@@ -298,7 +260,7 @@ struct DemRunCommand {
         if ((engine.step_count() - first_step) % every == 0 || engine.step_count() == total_steps ||
             empty) {
           output();
-          if (!checkpoint.empty()) dem::write_checkpoint(engine, frame, checkpoint);
+          if (!checkpoint.empty()) dem::write_checkpoint(engine, outputs.frames(), checkpoint);
         }
         if (empty) {
           fmt::print("every particle has left through the sink by t = {:.6g} s: stopping\n",
@@ -307,7 +269,7 @@ struct DemRunCommand {
         }
         if (stop_mass > 0 && engine.removed_mass() >= stop_mass) {
           output();
-          if (!checkpoint.empty()) dem::write_checkpoint(engine, frame, checkpoint);
+          if (!checkpoint.empty()) dem::write_checkpoint(engine, outputs.frames(), checkpoint);
           fmt::print(
               "the sink has taken {:.6g} kg of {:.6g} kg (--until-discharged {:g}) by t = "
               "{:.6g} s: stopping\n",
@@ -319,14 +281,7 @@ struct DemRunCommand {
       fmt::print(stderr, "contactlab: error: unstable run: {}\n", e.what());
       return 4;
     }
-#ifdef CONTACTLAB_HAVE_CAIRO
-    if (painter && log) {
-      const std::string plot = in_dir(png_dir_, config.name + "_discharge.png");
-      dem::write_discharge_plot(plot, log->rows(),
-                                fmt::format("{}: discharged mass (sink below z = {:.4g} m)",
-                                            config.name, settings.sink_below_z));
-    }
-#endif
+    outputs.finish();
     const double wall = omp_get_wtime() - t0;
     const double steps = static_cast<double>(engine.step_count() - first_step);
     const dem::Energies e = engine.energies();
@@ -344,7 +299,7 @@ struct DemRunCommand {
     fmt::print("energy [J]: kinetic {:.6g}, potential {:.6g}, dissipated {:.6g}\n", e.kinetic,
                e.potential, e.dissipated);
     if (has_sink) {
-      const dem::DischargeRow row = dem::discharge_row(engine);
+      const dem::DischargeRow row = dem::discharge_row(engine.snapshot());
       fmt::print("discharged: {:.6g} kg in {} particles, {} left\n", row.discharged_kg,
                  row.discharged, row.left);
     }
@@ -471,7 +426,7 @@ Subcommand add_dem_command(CLI::App& app, const std::string& command_line) {
                       "--mpi: write the run and every rank's phase times as JSON");
   run_app->add_option("--checkpoint", run->checkpoint_,
                       "checkpoint file written at every output (default: DIR/last.chk with --vtk; "
-                      "with --mpi, at the end: the file one process would have written)");
+                      "with --mpi, the file one process would have written)");
   auto validate = std::make_shared<DemValidateCommand>();
   CLI::App* validate_app = sub->add_subcommand("validate", "run every validation case");
   validate_app->add_option("--case", validate->only_, "run only this case");

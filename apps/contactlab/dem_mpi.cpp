@@ -61,6 +61,7 @@ int run_dem_mpi(const DemMpiRequest& request) {
     dem::CarriedSprings springs;               // --restart: the checkpoint's
     std::optional<dem::Engine::State> resume;  // --restart: its time and counters
     int frames = 0;
+    std::unique_ptr<RunOutputs> outputs;  // rank 0's
     // Every rank reads the config and plans the same slabs (O(N) each at the start), then
     // keeps its own particles.
     mpi::run_checked(comm, [&] {
@@ -73,16 +74,18 @@ int run_dem_mpi(const DemMpiRequest& request) {
       }
       const int axis = request.axis.empty() ? -1 : dem::parse_axis(request.axis);
       if (!request.json_out.empty() && rank == 0) prepare_output_file(request.json_out);
-      if (!request.checkpoint.empty() && rank == 0) prepare_output_file(request.checkpoint);
       config = dem::read_dem_config(request.config);
       settings = config.settings;
       settings.threads = resolve_threads(request.threads);
       if (settings.threads < 1) throw InputError("--threads must be >= 0");
+      if (!request.variant.empty())
+        settings.force_variant = dem::parse_force_variant(request.variant);
       if (request.until_discharged > 0 &&
           !(settings.sink_below_z > -std::numeric_limits<double>::infinity())) {
         throw InputError("--until-discharged needs a config with a sink");
       }
       dem::Particles all = dem::make_particles(config);
+      if (rank == 0) outputs = std::make_unique<RunOutputs>(request.outputs, config, all);
       if (!request.restart.empty()) {
         // A checkpoint of any run: its particles and list weigh the slabs, its springs are
         // carried into each rank's first list, its counters go on (rank 0 holds the sums).
@@ -93,6 +96,7 @@ int run_dem_mpi(const DemMpiRequest& request) {
         dem::collect_springs(all, parts.pairs, springs);
         resume = parts.state;
         frames = parts.frames;
+        if (outputs) outputs->continue_series(resume->time_s, frames);
         if (rank != 0) {
           resume->large_overlaps = 0;
           resume->initial_energy = 0.0;
@@ -139,29 +143,71 @@ int run_dem_mpi(const DemMpiRequest& request) {
           plan.slabs.periodic ? " (periodic)" : "", plan.load.imbalance, plan.halo, settings.dt_s,
           engine->step_count(), total_steps);
     }
-    // Batches of at most 1000 steps; with --until-discharged each ends at a rebuild (the only
-    // step the sink takes particles), and the discharged mass is summed over the ranks there.
+    // As one process: the steps between outputs run as one batch; with --until-discharged each
+    // batch ends at a rebuild (the only step the sink takes particles), where the discharged
+    // mass is summed over the ranks. At every output step rank 0 writes the gathered run.
     const auto end =
         stop_mass > 0 ? dem::Engine::BatchEnd::kAtRebuild : dem::Engine::BatchEnd::kAfterSteps;
+    const std::uint64_t first_step = engine->step_count();
+    const std::uint64_t every =
+        config.output_every_s > 0
+            ? std::max<std::uint64_t>(1, static_cast<std::uint64_t>(
+                                             std::llround(config.output_every_s / settings.dt_s)))
+            : std::max<std::uint64_t>(1, total_steps - first_step);
+    const DemOutputOptions& asked = request.outputs;
+    const bool frames_or_rows =
+        !asked.vtk_dir.empty() || !asked.png_dir.empty() || !asked.discharge.empty();
+    const bool checkpoints = !asked.checkpoint.empty() || !asked.vtk_dir.empty();
+    double output_s = 0.0;
+    auto output = [&](bool with_checkpoint) {
+      if (!frames_or_rows && !(with_checkpoint && checkpoints)) return;
+      const double start = omp_get_wtime();
+      dem::mpi::GatheredRun run = dem::mpi::gather_run(comm, *engine, halo);
+      mpi::run_checked(comm, [&] {
+        if (outputs) outputs->write(run.snapshot(settings));
+      });
+      if (with_checkpoint && checkpoints) {
+        const int written = outputs ? outputs->frames() : 0;  // rank 0's count is the one written
+        dem::mpi::write_checkpoint(comm, *engine, halo, std::move(run), written,
+                                   outputs ? outputs->checkpoint() : std::string());
+      }
+      output_s += omp_get_wtime() - start;
+    };
     MPI_Barrier(comm);
     const double t0 = omp_get_wtime();
     double discharged = 0.0;
     try {
-      while (engine->step_count() < total_steps && engine->run_particles() > 0) {
-        engine->run_steps(std::min<std::uint64_t>(1000, total_steps - engine->step_count()), end);
-        if (stop_mass > 0) {
-          discharged = halo.sum_over_ranks(engine->removed_mass());
-          if (discharged >= stop_mass) break;
+      if (engine->step_count() == 0) output(false);
+      while (engine->step_count() < total_steps) {
+        const std::uint64_t to_output = every - (engine->step_count() - first_step) % every;
+        engine->run_steps(std::min(to_output, total_steps - engine->step_count()), end);
+        const bool empty = engine->run_particles() == 0;
+        if (stop_mass > 0) discharged = halo.sum_over_ranks(engine->removed_mass());
+        const bool stop = stop_mass > 0 && discharged >= stop_mass;
+        if ((engine->step_count() - first_step) % every == 0 ||
+            engine->step_count() == total_steps || empty || stop) {
+          output(true);
         }
+        if (empty && rank == 0) {
+          fmt::print("every particle has left through the sink by t = {:.6g} s: stopping\n",
+                     engine->time_s());
+        }
+        if (stop && rank == 0) {
+          fmt::print(
+              "the sink has taken {:.6g} kg of {:.6g} kg (--until-discharged {:g}) by t = {:.6g} "
+              "s: stopping\n",
+              discharged, start_mass, request.until_discharged, engine->time_s());
+        }
+        if (empty || stop) break;
       }
+      mpi::run_checked(comm, [&] {
+        if (outputs) outputs->finish();
+      });
     } catch (const std::exception& e) {
       mpi::abort_all(comm, e.what(), 4);
     }
     const double wall = omp_get_wtime() - t0;
-    if (!request.checkpoint.empty()) {
-      dem::mpi::write_checkpoint(comm, *engine, halo, frames, request.checkpoint);
-      if (rank == 0) fmt::print("wrote {}\n", request.checkpoint);
-    }
+    if (rank == 0 && checkpoints) fmt::print("wrote {}\n", outputs->checkpoint());
     discharged = halo.sum_over_ranks(engine->removed_mass());
     const double particle_steps =
         halo.sum_over_ranks(static_cast<double>(engine->particle_steps()));
@@ -183,9 +229,12 @@ int run_dem_mpi(const DemMpiRequest& request) {
       if (rank != 0) return;
       fmt::print(
           "done: t = {:.6g} s, {} steps in {:.3f} s ({:.3g} particle-steps/s over all ranks), "
-          "{} rebuilds\n",
-          engine->time_s(), engine->step_count(), wall, particle_steps / std::max(wall, 1e-9),
-          engine->rebuilds());
+          "{} rebuilds, step on {}{}\n",
+          engine->time_s(), engine->step_count() - first_step, wall,
+          particle_steps / std::max(wall, 1e-9), engine->rebuilds(),
+          dem::to_string(engine->instruction_set()),
+          output_s > 0 ? fmt::format("; {:.3f} s of it gathering and writing outputs", output_s)
+                       : "");
       fmt::print("{:>5} {:>9} {:>8} {:>10} {:>10} {:>10} {:>10} {:>10} {:>10} {:>9}\n", "rank",
                  "owned", "ghosts", "forces s", "list s", "integr. s", "halo s", "migrate s",
                  "waits s", "migrated");
@@ -247,6 +296,9 @@ int run_dem_mpi(const DemMpiRequest& request) {
           {"steps", engine->step_count()},
           {"time_s", engine->time_s()},
           {"wall_s", wall},
+          {"output_s", output_s},
+          {"force_variant", dem::to_string(settings.force_variant)},
+          {"instruction_set", dem::to_string(engine->instruction_set())},
           {"particle_steps_per_s", particle_steps / std::max(wall, 1e-9)},
           {"rebuilds", engine->rebuilds()},
           {"force_imbalance", force_imbalance},

@@ -6,6 +6,8 @@
 #include <functional>
 #include <string>
 
+#include "dem_outputs.hpp"
+
 namespace contactlab::cli {
 
 struct DemMpiRequest {
@@ -15,10 +17,12 @@ struct DemMpiRequest {
   double until_discharged = 0.0;  // 0: off
   std::string axis;               // empty: the longest
   double rebalance_margin = 0.1;  // re-cut the slabs when the largest work exceeds the mean by it
+  std::string variant;            // a force variant by name; empty: the config's
   std::string json_out;
-  std::string checkpoint;
-  std::string restart;  // a checkpoint of the config, from any run (one process or any ranks)  //
-                        // written at the end: the file one process would have written
+  // Frames, pictures, the discharge CSV and the checkpoint, written by rank 0 from the run
+  // gathered at every output step: the files one process would have written.
+  DemOutputOptions outputs;
+  std::string restart;  // a checkpoint of the config, from any run (one process or any ranks)
   std::string command_line;
   std::function<void()> check_options;  // run on every rank; throws InputError
 };

@@ -61,7 +61,7 @@ TEST(DemPicture, SectionAndDischargePlotAreValidPngs) {
   SectionPainter painter(dir, "bed", view, height_layers(particles, view.layers));
   Engine engine(settings, particles);
   engine.run_steps(20);
-  painter.write(engine, 2);
+  painter.write(engine.snapshot(), 2);
   EXPECT_EQ(painter.frame_path(2), dir + (dir.back() == '/' ? "" : "/") + "bed_section_00002.png");
   EXPECT_EQ(painter.width(), 70 + 300 + 170);
   // The 10 x 50 mm window at 300 px across: 1500 px of plot, plus the margins.

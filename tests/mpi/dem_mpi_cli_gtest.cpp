@@ -1,13 +1,21 @@
 // `contactlab dem run --mpi` and `dem partition` end to end: the run's JSON has one entry per
 // rank and counts every particle once; the partition's slabs hold every particle once;
-// options --mpi does not support yet, a missing config and --axis without --mpi end every rank
+// frames, series and checkpoints are those of one process; a force variant by name runs;
+// --variant auto, a missing config and --axis without --mpi end every rank
 // with one message and a non-zero exit.
+#include <fmt/core.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+#include <vector>
 
+#include "dem_configs.hpp"
 #include "mpi_cli_support.hpp"
 #include "program_test_support.hpp"
 
@@ -73,16 +81,116 @@ TEST(DemMpiCli, ACheckpointOfOneProcessRestartsOnThreeRanks) {
   EXPECT_NE(bad.output.find("not a contactlab DEM checkpoint"), std::string::npos) << bad.output;
 }
 
-TEST(DemMpiCli, WhatMpiDoesNotSupportYetIsOneMessageOnEveryRankCount) {
-  TempDir dir;
+// The force model behind --variant auto is calibrated in one process: refused by name, on
+// every rank, at once.
+TEST(DemMpiCli, WhatMpiDoesNotSupportIsOneMessageOnEveryRankCount) {
   const auto start = std::chrono::steady_clock::now();
   const auto run = run_command(mpiexec(2) + contactlab_exe() + " dem run " + drop_box() +
-                               " --mpi --steps 10 --vtk " + dir.file("out"));
+                               " --mpi --steps 10 --variant auto");
   EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 30.0);
   EXPECT_NE(run.exit_code, 0) << run.output;
   EXPECT_EQ(count_of(run.output, "contactlab: error:"), 1) << run.output;
-  EXPECT_NE(run.output.find("--vtk is not available with --mpi yet"), std::string::npos)
+  EXPECT_NE(run.output.find("--variant auto is not available with --mpi"), std::string::npos)
       << run.output;
+}
+
+// The rows of a CSV after its header, each split at the commas.
+std::vector<std::vector<std::string>> csv_rows(const std::string& path) {
+  std::vector<std::vector<std::string>> rows;
+  std::istringstream in(slurp(path));
+  std::string line;
+  std::getline(in, line);
+  while (std::getline(in, line)) {
+    std::vector<std::string> row;
+    std::istringstream fields(line);
+    for (std::string field; std::getline(fields, field, ',');) row.push_back(field);
+    rows.push_back(row);
+  }
+  return rows;
+}
+
+// Two CSVs with the same rows: the columns in `summed` (sums over the ranks, in another order)
+// within `tolerance` of the largest of them in the row, every other column the same text.
+void expect_csv_near(const std::string& a, const std::string& b, const std::vector<int>& summed,
+                     double tolerance) {
+  const auto rows_a = csv_rows(a), rows_b = csv_rows(b);
+  ASSERT_EQ(rows_a.size(), rows_b.size()) << a << " against " << b;
+  for (std::size_t r = 0; r < rows_a.size(); ++r) {
+    ASSERT_EQ(rows_a[r].size(), rows_b[r].size());
+    double scale = 0.0;
+    for (const int c : summed) scale = std::max(scale, std::abs(std::stod(rows_a[r][c])));
+    for (std::size_t c = 0; c < rows_a[r].size(); ++c) {
+      if (std::find(summed.begin(), summed.end(), static_cast<int>(c)) == summed.end()) {
+        EXPECT_EQ(rows_a[r][c], rows_b[r][c]) << a << " row " << r << " column " << c;
+      } else {
+        EXPECT_NEAR(std::stod(rows_a[r][c]), std::stod(rows_b[r][c]), tolerance * scale)
+            << a << " row " << r << " column " << c;
+      }
+    }
+  }
+}
+
+// The first command on a hopper whose sink takes particles: three ranks write the frames
+// one process writes, to the byte (the same trajectories, gathered in stable-id order); the
+// discharge and energy series agree to the last bits of their sums over the ranks; the
+// checkpoint in the folder restarts the series on two ranks.
+TEST(DemMpiCli, OutputsOfThreeRanksAreThoseOfOneProcess) {
+  TempDir dir;
+  std::string text = slurp(tiny_hopper_with_sink(dir, "0.0005"));  // the sink at the gate
+  const std::string end = "\"end\": 0.004";
+  text.replace(text.find(end), end.size(), "\"end\": 0.006");
+  const std::string config = dir.file("hopper.json");
+  std::ofstream(config) << text;
+  const auto one = run_command(contactlab_exe() + " dem run " + config + " --threads 1 --vtk " +
+                               dir.file("one"));
+  ASSERT_EQ(one.exit_code, 0) << one.output;
+  const auto three = run_command(mpiexec(3) + contactlab_exe() + " dem run " + config +
+                                 " --mpi --threads 1 --vtk " + dir.file("three"));
+  ASSERT_EQ(three.exit_code, 0) << three.output;
+  EXPECT_NE(three.output.find("wrote " + dir.file("three") + "/last.chk"), std::string::npos)
+      << three.output;
+  for (int f = 0; f <= 6; ++f) {
+    const std::string frame = fmt::format("/tiny_{:05d}.vtp", f);
+    EXPECT_EQ(slurp(dir.file("one") + frame), slurp(dir.file("three") + frame)) << frame;
+  }
+  EXPECT_EQ(slurp(dir.file("one") + "/tiny.pvd"), slurp(dir.file("three") + "/tiny.pvd"));
+  const auto discharge = csv_rows(dir.file("three") + "/tiny_discharge.csv");
+  ASSERT_EQ(discharge.size(), 7u);
+  EXPECT_GT(std::stoi(discharge.back()[3]), 0) << "the sink took no particle";
+  expect_csv_near(dir.file("one") + "/tiny_discharge.csv",
+                  dir.file("three") + "/tiny_discharge.csv", {2}, 1e-13);
+  expect_csv_near(dir.file("one") + "/tiny_energy.csv", dir.file("three") + "/tiny_energy.csv",
+                  {2, 3, 4}, 1e-12);
+  // Two ranks go on from the three ranks' checkpoint: the series continues, the frames kept.
+  const auto next = run_command(mpiexec(2) + contactlab_exe() + " dem run " + config +
+                                " --mpi --threads 1 --steps 500 --vtk " + dir.file("three") +
+                                " --restart " + dir.file("three") + "/last.chk");
+  ASSERT_EQ(next.exit_code, 0) << next.output;
+  EXPECT_NE(next.output.find("steps 3000 -> 3500"), std::string::npos) << next.output;
+  EXPECT_EQ(csv_rows(dir.file("three") + "/tiny_discharge.csv").size(), 8u);
+  EXPECT_EQ(count_of(slurp(dir.file("three") + "/tiny.pvd"), "<DataSet"), 8);
+  EXPECT_EQ(slurp(dir.file("one") + "/tiny_00003.vtp"),
+            slurp(dir.file("three") + "/tiny_00003.vtp"));
+}
+
+// A force variant by name runs on every rank: the full list gives the default's trajectories
+// (its sums in the same order), so its frame equals one process's default frame to the byte.
+TEST(DemMpiCli, AForceVariantByNameRunsOnEveryRank) {
+  TempDir dir;
+  const auto one = run_command(contactlab_exe() + " dem run " + drop_box() +
+                               " --threads 1 --steps 300 --vtk " + dir.file("one"));
+  ASSERT_EQ(one.exit_code, 0) << one.output;
+  const auto two =
+      run_command(mpiexec(2) + contactlab_exe() + " dem run " + drop_box() +
+                  " --mpi --threads 2 --steps 300 --variant full-list/dynamic,4 --vtk " +
+                  dir.file("two") + " --json " + dir.file("two.json"));
+  ASSERT_EQ(two.exit_code, 0) << two.output;
+  EXPECT_EQ(slurp(dir.file("one") + "/drop_00001.vtp"), slurp(dir.file("two") + "/drop_00001.vtp"));
+  EXPECT_EQ(read_json(dir.file("two.json"))["force_variant"], "full-list/dynamic,4");
+  const auto bad = run_command(mpiexec(2) + contactlab_exe() + " dem run " + drop_box() +
+                               " --mpi --steps 10 --variant ordered/dynamic,4");
+  EXPECT_NE(bad.exit_code, 0);
+  EXPECT_EQ(count_of(bad.output, "contactlab: error:"), 1) << bad.output;
 }
 
 TEST(DemMpiCli, AMissingConfigEndsEveryRankWithOneMessage) {

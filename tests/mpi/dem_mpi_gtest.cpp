@@ -8,6 +8,7 @@
 #include <mpi.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <bit>
 #include <cmath>
 #include <cstdint>
@@ -20,6 +21,7 @@
 #include "contactlab/dem/checkpoint.hpp"
 #include "contactlab/dem/config.hpp"
 #include "contactlab/dem/engine.hpp"
+#include "contactlab/dem/force_variant.hpp"
 #include "contactlab/dem/slabs.hpp"
 #include "contactlab/dem_mpi/checkpoint.hpp"
 #include "contactlab/dem_mpi/halo_exchange.hpp"
@@ -327,6 +329,36 @@ INSTANTIATE_TEST_SUITE_P(Slabs, DemMpiAxes, ::testing::Values(0, 2),
                          [](const ::testing::TestParamInfo<int>& axis) {
                            return axis_name(axis.param);
                          });
+
+// Every accumulation of the force pass, with its walls and update variants, on two threads a
+// rank: those whose sums have a fixed order (ordered, full-list) give the one-process run's bits;
+// the shared ones (per-thread, atomic) differ from it by round-off only, as they do between
+// thread counts in one process (dem_force_variant_gtest's bound).
+TEST(DemMpiVariants, EveryForceVariantRunsAsInOneProcess) {
+  for (const char* text :
+       {"ordered/static", "ordered/static/walls=serial", "ordered/static/update=fused",
+        "full-list/dynamic,4", "per-thread/dynamic,4", "atomic/guided,2",
+        "per-thread/dynamic,1/walls=serial"}) {
+    auto [settings, particles] = small_bed(150);
+    settings.threads = 2;
+    settings.force_variant = parse_force_variant(text);
+    constexpr std::uint64_t kSteps = 600;
+    const Outcome one = one_process(settings, particles, kSteps);
+    const Outcome many = decomposed(settings, particles, 2, kSteps);
+    if (rank() != 0) continue;
+    if (thread_count_invariant(settings.force_variant)) {
+      SCOPED_TRACE(text);
+      expect_same_bits(one.state, many.state);
+      continue;
+    }
+    double worst = 0.0;
+    for (std::size_t k = 0; k < one.state.size(); ++k) {
+      worst = std::max(
+          worst, std::abs(one.state[k] - many.state[k]) / std::max(1.0, std::abs(one.state[k])));
+    }
+    EXPECT_LT(worst, 1e-9) << text;
+  }
+}
 
 // Two spheres pressed together and sheared (opposite tangential velocities, spinning), drifting
 // together across the slab boundaries: the rank that takes them over must continue their

@@ -16,21 +16,21 @@ constexpr const char* kHeader = "time_s,step,discharged_kg,discharged_particles,
 
 }  // namespace
 
-DischargeRow discharge_row(const Engine& engine) {
-  const Particles& p = engine.particles();
-  const double level = engine.settings().sink_below_z;
+DischargeRow discharge_row(const Snapshot& run) {
+  const Particles& p = run.particles;
+  const double level = run.settings.sink_below_z;
   DischargeRow row;
-  row.time_s = engine.time_s();
-  row.step = engine.step_count();
-  row.discharged_kg = engine.removed_mass();
-  row.discharged = engine.removed_count();
+  row.time_s = run.time_s;
+  row.step = run.step;
+  row.discharged_kg = run.removed_mass;
+  row.discharged = run.removed_count;
   for (std::size_t a = 0; a < p.size(); ++a) {
     if (p.z[a] < level) {
       row.discharged_kg += p.mass[a];
       ++row.discharged;
     }
   }
-  row.left = p.size() - (row.discharged - engine.removed_count());
+  row.left = p.size() - (row.discharged - run.removed_count);
   return row;
 }
 
@@ -38,8 +38,8 @@ DischargeLog::DischargeLog(std::string path) : path_(std::move(path)) {
   prepare_output_file(path_);
 }
 
-void DischargeLog::record(const Engine& engine) {
-  rows_.push_back(discharge_row(engine));
+void DischargeLog::record(const Snapshot& run) {
+  rows_.push_back(discharge_row(run));
   write_file_atomically(path_, [&](std::ostream& out) {
     out << kHeader << '\n';
     for (const DischargeRow& r : rows_) {

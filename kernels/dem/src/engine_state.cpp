@@ -1,5 +1,6 @@
 // The engine's state as a whole: its energy balance, and the restore from a checkpoint.
 #include <cmath>
+#include <stdexcept>
 
 #include "contactlab/dem/engine.hpp"
 
@@ -15,6 +16,11 @@ Energies Engine::energies() const {
   }
   e.dissipated = initial - (e.kinetic + e.potential);
   return e;
+}
+
+Snapshot Engine::snapshot() const {
+  if (halo_ != nullptr) throw std::logic_error("Engine::snapshot of one process's part of a run");
+  return {particles_, settings_, time_s_, step_, energies(), removed_count_, removed_mass_};
 }
 
 Energies Engine::local_energies() const {

@@ -3,6 +3,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <fstream>
 #include <ostream>
 #include <sstream>
@@ -50,16 +51,19 @@ void FrameWriter::continue_series(double until_time_s, int frames) {
   }
 }
 
-void FrameWriter::write(const Engine& engine, int frame) {
-  const Particles& p = engine.particles();
+void FrameWriter::write(const Snapshot& run, int frame) {
+  const Particles& p = run.particles;
   const std::size_t n = p.size();
-  // Stable-id order: frames comparable across reorders. Ids are not dense once the sink has
-  // removed particles: the present ones, ascending.
-  std::vector<std::uint32_t> by_id(engine.id_capacity(), Engine::kRemoved), order;
+  // Stable-id order: frames comparable across reorders and rank counts. Ids are not dense once
+  // the sink has removed particles: the present ones, ascending.
+  std::uint32_t ids = 0;
+  for (const std::uint32_t id : p.id) ids = std::max(ids, id + 1);
+  constexpr std::uint32_t kAbsent = UINT32_MAX;
+  std::vector<std::uint32_t> by_id(ids, kAbsent), order;
   for (std::size_t a = 0; a < n; ++a) by_id[p.id[a]] = static_cast<std::uint32_t>(a);
   order.reserve(n);
   for (std::uint32_t a : by_id) {
-    if (a != Engine::kRemoved) order.push_back(a);
+    if (a != kAbsent) order.push_back(a);
   }
   const std::string file = frame_path(frame);
   write_file_atomically(file, [&](std::ostream& out) {
@@ -101,8 +105,8 @@ void FrameWriter::write(const Engine& engine, int frame) {
   });
   const std::string base = fmt::format("{}_{:05d}.vtp", name_, frame);
   if (static_cast<std::size_t>(frame) < entries_.size()) entries_.resize(frame);
-  entries_.push_back({engine.time_s(), base});
-  energy_.push_back({engine.time_s(), engine.step_count(), engine.energies()});
+  entries_.push_back({run.time_s, base});
+  energy_.push_back({run.time_s, run.step, run.energies});
   write_file_atomically(dir_ + name_ + ".pvd", [&](std::ostream& out) {
     out << "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n<Collection>\n";
     for (const Entry& e : entries_) {

@@ -205,7 +205,7 @@ int SectionPainter::height() const {
   return kTop + static_cast<int>(std::lround(view_.plot_width_px * aspect)) + kBottom;
 }
 
-void SectionPainter::write(const Engine& engine, int frame) const {
+void SectionPainter::write(const Snapshot& run, int frame) const {
   Canvas canvas(width(), height());
   cairo_t* cr = canvas.cr();
   const Frame f{kLeft,      static_cast<double>(kLeft + view_.plot_width_px),
@@ -217,7 +217,7 @@ void SectionPainter::write(const Engine& engine, int frame) const {
   cairo_rectangle(cr, f.px0, f.py0, f.px1 - f.px0, f.py1 - f.py0);
   cairo_clip(cr);
   // Spheres of the slab, the far side first (the near ones on top).
-  const Particles& p = engine.particles();
+  const Particles& p = run.particles;
   std::vector<std::uint32_t> slab;
   for (std::size_t a = 0; a < p.size(); ++a) {
     if (std::abs(p.y[a] - view_.axis_y) < view_.slab_half_width) {
@@ -239,10 +239,10 @@ void SectionPainter::write(const Engine& engine, int frame) const {
     cairo_stroke(cr);
   }
   // The walls cut by the plane y = axis_y (vertical axes only).
-  const double t = engine.time_s();
+  const double t = run.time_s;
   cairo_set_source_rgb(cr, 0, 0, 0);
   cairo_set_line_width(cr, 2.0);
-  for (const Wall& w : engine.settings().walls) {
+  for (const Wall& w : run.settings.walls) {
     if (!w.active(t)) continue;
     const Vec3 shift = w.offset(t);
     const double cx = w.point[0] + shift[0], cz = w.point[2] + shift[2];
@@ -276,7 +276,7 @@ void SectionPainter::write(const Engine& engine, int frame) const {
   canvas.text(
       kLeft, 24,
       fmt::format("t = {:.4f} s   {} particles ({} removed)   slab |y - {:.4g}| < {:.3g} mm", t,
-                  p.size(), engine.removed_count(), view_.axis_y, view_.slab_half_width * 1e3));
+                  p.size(), run.removed_count, view_.axis_y, view_.slab_half_width * 1e3));
   // Legend: one swatch per initial-height band, the top band first.
   const double lx = f.px1 + 20;
   canvas.text(lx, f.py0 + 12, "initial height");

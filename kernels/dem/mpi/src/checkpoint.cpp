@@ -7,52 +7,22 @@
 #include <vector>
 
 #include "contactlab/dem/checkpoint.hpp"
-#include "contactlab/kernels/error.hpp"
+#include "contactlab/dem_mpi/gather.hpp"
 #include "contactlab/mpi/runtime.hpp"
-#include "particle_records.hpp"
 
 namespace contactlab::dem::mpi {
 
-namespace {
-
-// Every rank's bytes concatenated on rank 0 (empty elsewhere).
-std::vector<char> gather_bytes(MPI_Comm comm, const std::vector<char>& mine) {
-  const int ranks = contactlab::mpi::size_of(comm);
-  const int rank = contactlab::mpi::rank_of(comm);
-  const auto size = static_cast<long long>(mine.size());
-  std::vector<long long> sizes(static_cast<std::size_t>(ranks));
-  MPI_Gather(&size, 1, MPI_LONG_LONG, sizes.data(), 1, MPI_LONG_LONG, 0, comm);
-  std::vector<int> counts(static_cast<std::size_t>(ranks)), offsets(counts.size());
-  std::vector<char> all;
-  if (rank == 0) {
-    long long total = 0;
-    for (int r = 0; r < ranks; ++r) {
-      if (sizes[r] > INT32_MAX || total + sizes[r] > INT32_MAX) {
-        throw InputError("a checkpoint of more than 2 GiB cannot be gathered on one rank yet");
-      }
-      counts[r] = static_cast<int>(sizes[r]);
-      offsets[r] = static_cast<int>(total);
-      total += sizes[r];
-    }
-    all.resize(static_cast<std::size_t>(total));
-  }
-  MPI_Gatherv(mine.data(), static_cast<int>(mine.size()), MPI_BYTE, all.data(), counts.data(),
-              offsets.data(), MPI_BYTE, 0, comm);
-  return all;
-}
-
-}  // namespace
-
 void write_checkpoint(MPI_Comm comm, const Engine& engine, const HaloExchange& halo, int frames,
                       const std::string& path) {
+  write_checkpoint(comm, engine, halo, gather_run(comm, engine, halo), frames, path);
+}
+
+void write_checkpoint(MPI_Comm comm, const Engine& engine, const HaloExchange& halo,
+                      GatheredRun run, int frames, const std::string& path) {
   const Particles& p = engine.particles();
   const PairList& q = engine.pairs();
-  // This rank's own particles, and the springs of the pairs with one of them (a pair across a
-  // boundary comes from both ranks, with the same bits).
-  std::vector<char> records;
-  for (std::size_t a = 0; a < p.size(); ++a) {
-    if (!halo.is_ghost(a)) append_record(p, a, records);
-  }
+  // The springs of the pairs with an own particle (a pair across a boundary comes from both
+  // ranks, with the same bits).
   std::vector<char> springs;
   for (std::size_t k = 0; k < q.size(); ++k) {
     if (halo.is_ghost(q.i[k]) && halo.is_ghost(q.j[k])) continue;
@@ -66,24 +36,10 @@ void write_checkpoint(MPI_Comm comm, const Engine& engine, const HaloExchange& h
     springs.insert(springs.end(), reinterpret_cast<const char*>(s),
                    reinterpret_cast<const char*>(s) + sizeof s);
   }
-  Engine::State state = engine.state();
-  double sums[4] = {static_cast<double>(state.large_overlaps), state.initial_energy,
-                    static_cast<double>(state.removed_count), state.removed_mass};
-  MPI_Allreduce(MPI_IN_PLACE, sums, 4, MPI_DOUBLE, MPI_SUM, comm);
-  const std::vector<char> all_records = gather_bytes(comm, records);
   const std::vector<char> all_springs = gather_bytes(comm, springs);
   contactlab::mpi::run_checked(comm, [&] {
     if (contactlab::mpi::rank_of(comm) != 0) return;
-    state.large_overlaps = static_cast<std::uint64_t>(sums[0]);
-    state.initial_energy = sums[1];
-    state.removed_count = static_cast<std::uint64_t>(sums[2]);
-    state.removed_mass = sums[3];
-    Particles gathered;
-    gathered.wall_spring.assign(p.wall_spring.size(), {});
-    const std::size_t record = record_bytes(p);
-    for (std::size_t at = 0; at < all_records.size(); at += record) {
-      read_record(all_records.data() + at, gathered);
-    }
+    Particles& gathered = run.particles;
     // The order and the list of the last rebuild: the builder on the positions it saw then.
     Particles then = gathered;
     then.x = then.x0;
@@ -119,7 +75,7 @@ void write_checkpoint(MPI_Comm comm, const Engine& engine, const HaloExchange& h
       pairs.hy[k] = sign * s[1];
       pairs.hz[k] = sign * s[2];
     }
-    dem::write_checkpoint(state, gathered, pairs, frames, path);
+    dem::write_checkpoint(run.state, gathered, pairs, frames, path);
   });
 }
 

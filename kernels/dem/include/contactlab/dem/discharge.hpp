@@ -18,17 +18,17 @@ struct DischargeRow {
   std::uint64_t left = 0;        // particles above the sink level
 };
 
-// Exact at the engine's time, whatever the rebuild times: the particles below the sink level
+// Exact at the run's time, whatever the rebuild times: the particles below the sink level
 // that the next rebuild will remove are counted as discharged already.
-DischargeRow discharge_row(const Engine& engine);
+DischargeRow discharge_row(const Snapshot& run);
 
 class DischargeLog {
  public:
   // Makes the file's folder (and those above it) if missing; throws InputError if it cannot be
   // made or is not writable.
   explicit DischargeLog(std::string path);
-  // Appends the engine's row and rewrites the file.
-  void record(const Engine& engine);
+  // Appends the run's row and rewrites the file.
+  void record(const Snapshot& run);
   // A restarted run continues the series: the rows of the file up to this time are kept.
   void continue_series(double until_time_s);
   const std::vector<DischargeRow>& rows() const { return rows_; }

@@ -103,6 +103,19 @@ class UnstableRun : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+// What an output (a frame, a picture, a discharge row) shows of a run at one step: one
+// process's engine (Engine::snapshot), or a decomposed run's particles gathered on one rank
+// with the counters summed over the ranks (dem_mpi/gather.hpp).
+struct Snapshot {
+  const Particles& particles;  // the run's present particles, in any order
+  const EngineSettings& settings;
+  double time_s = 0.0;
+  std::uint64_t step = 0;
+  Energies energies;
+  std::uint64_t removed_count = 0;  // particles the sink removed so far, and their mass [kg]
+  double removed_mass = 0.0;
+};
+
 class Engine {
  public:
   // Checks dt against the stable limit (InputError stating it), builds the neighbour list,
@@ -153,6 +166,9 @@ class Engine {
   double removed_mass() const { return removed_mass_; }
   // With a halo, over every process (collective), ghosts not counted.
   Energies energies() const;
+  // The run as an output shows it; one process only (a decomposed run gathers its own:
+  // with a halo this throws std::logic_error).
+  Snapshot snapshot() const;
   // The particles of the run: this engine's, or with a halo every process's owned ones
   // (as of the last rebuild).
   std::uint64_t run_particles() const { return run_particles_; }

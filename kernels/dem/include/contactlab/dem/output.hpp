@@ -17,7 +17,7 @@ class FrameWriter {
   FrameWriter(std::string dir, std::string name);
   // Writes frame `frame` (particles in stable-id order: id, radius, velocity, angular velocity,
   // contact count, contact force magnitude) and rewrites the .pvd and the CSV.
-  void write(const Engine& engine, int frame);
+  void write(const Snapshot& run, int frame);
   // Restarted runs continue a series: the entries before the restart's time are kept.
   void continue_series(double until_time_s, int frames);
   std::string frame_path(int frame) const;

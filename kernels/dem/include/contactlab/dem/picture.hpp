@@ -37,8 +37,8 @@ class SectionPainter {
   std::string frame_path(int frame) const;
   int width() const;
   int height() const;
-  // The slab at the engine's time, with the walls cut by the plane, a legend and a time label.
-  void write(const Engine& engine, int frame) const;
+  // The slab at the run's time, with the walls cut by the plane, a legend and a time label.
+  void write(const Snapshot& run, int frame) const;
 
  private:
   std::string dir_, name_;

@@ -10,6 +10,7 @@
 #include <string>
 
 #include "contactlab/dem/engine.hpp"
+#include "contactlab/dem_mpi/gather.hpp"
 #include "contactlab/dem_mpi/halo_exchange.hpp"
 
 namespace contactlab::dem::mpi {
@@ -18,5 +19,8 @@ namespace contactlab::dem::mpi {
 // across a boundary counted on both sides), the initial energy too (each rank's share).
 void write_checkpoint(MPI_Comm comm, const Engine& engine, const HaloExchange& halo, int frames,
                       const std::string& path);
+// The same from the run gathered at this step (gather_run), when its outputs need it too.
+void write_checkpoint(MPI_Comm comm, const Engine& engine, const HaloExchange& halo,
+                      GatheredRun run, int frames, const std::string& path);
 
 }  // namespace contactlab::dem::mpi

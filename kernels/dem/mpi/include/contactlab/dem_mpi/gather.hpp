@@ -1,0 +1,33 @@
+// A decomposed run as one process would see it, assembled on rank 0: what its outputs (frames,
+// pictures, the discharge CSV) and its checkpoints are written from.
+#pragma once
+
+#include <mpi.h>
+
+#include <vector>
+
+#include "contactlab/dem/engine.hpp"
+#include "contactlab/dem_mpi/halo_exchange.hpp"
+
+namespace contactlab::dem::mpi {
+
+// Every rank's bytes concatenated in rank order on rank 0 (empty elsewhere). Collective; throws
+// InputError on rank 0 past 2 GiB (MPI's int counts).
+std::vector<char> gather_bytes(MPI_Comm comm, const std::vector<char>& mine);
+
+struct GatheredRun {
+  Particles particles;  // every rank's own particles, in rank order (rank 0; empty elsewhere)
+  // The time and step, and the counters summed over the ranks (the sink's; the large overlaps,
+  // a pair across a boundary counted on both sides; the initial energy, each rank's share).
+  Engine::State state;
+  Energies energies;
+  Snapshot snapshot(const EngineSettings& settings) const {
+    return {particles,           settings,          state.time_s, state.step, energies,
+            state.removed_count, state.removed_mass};
+  }
+};
+
+// Collective.
+GatheredRun gather_run(MPI_Comm comm, const Engine& engine, const HaloExchange& halo);
+
+}  // namespace contactlab::dem::mpi
