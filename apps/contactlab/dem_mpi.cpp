@@ -19,6 +19,7 @@
 #include "contactlab/dem/slabs.hpp"
 #include "contactlab/dem_mpi/checkpoint.hpp"
 #include "contactlab/dem_mpi/halo_exchange.hpp"
+#include "contactlab/dem_mpi/start.hpp"
 #include "contactlab/kernels/atomic_file.hpp"
 #include "contactlab/kernels/error.hpp"
 #include "contactlab/mpi/runtime.hpp"
@@ -34,9 +35,9 @@ namespace tn = contactlab::tuner;
 // One rank's account of the run, gathered on rank 0.
 struct RankAccount {
   double owned = 0, ghosts = 0, neighbor_s = 0, force_s = 0, integrate_s = 0, refresh_s = 0,
-         migration_s = 0, wait_s = 0, migrated = 0, messages = 0;
+         migration_s = 0, wait_s = 0, migrated = 0, messages = 0, peak_rss_bytes = 0;
 };
-constexpr int kAccountFields = 10;
+constexpr int kAccountFields = 11;
 
 std::vector<RankAccount> gather_accounts(MPI_Comm comm, const RankAccount& mine) {
   const int ranks = mpi::size_of(comm);
@@ -55,15 +56,13 @@ int run_dem_mpi(const DemMpiRequest& request) {
   return with_agreed_errors(comm, [&] {
     dem::DemConfig config;
     dem::EngineSettings settings;
-    dem::Particles own;
-    dem::SlabPlan plan;
-    std::size_t particles = 0;
-    dem::CarriedSprings springs;               // --restart: the checkpoint's
+    std::optional<dem::Particles> all;         // rank 0's: every particle of the run
+    std::optional<dem::PairList> all_pairs;    // rank 0's, --restart: the checkpoint's list
     std::optional<dem::Engine::State> resume;  // --restart: its time and counters
     int frames = 0;
+    int axis = -1;
     std::unique_ptr<RunOutputs> outputs;  // rank 0's
-    // Every rank reads the config and plans the same slabs (O(N) each at the start), then
-    // keeps its own particles.
+    // Every rank reads the config (its settings); rank 0 alone makes the particles.
     mpi::run_checked(comm, [&] {
       request.check_options();
       if (!(request.rebalance_margin >= 0)) {
@@ -72,50 +71,59 @@ int run_dem_mpi(const DemMpiRequest& request) {
       if (request.until_discharged < 0 || request.until_discharged > 1) {
         throw InputError("--until-discharged must be a fraction in (0, 1]");
       }
-      const int axis = request.axis.empty() ? -1 : dem::parse_axis(request.axis);
+      axis = request.axis.empty() ? -1 : dem::parse_axis(request.axis);
       if (!request.json_out.empty() && rank == 0) prepare_output_file(request.json_out);
       config = dem::read_dem_config(request.config);
       settings = config.settings;
       settings.threads = resolve_threads(request.threads);
       if (settings.threads < 1) throw InputError("--threads must be >= 0");
-      if (!request.variant.empty())
+      if (!request.variant.empty()) {
         settings.force_variant = dem::parse_force_variant(request.variant);
+      }
       if (request.until_discharged > 0 &&
           !(settings.sink_below_z > -std::numeric_limits<double>::infinity())) {
         throw InputError("--until-discharged needs a config with a sink");
       }
-      dem::Particles all = dem::make_particles(config);
-      if (rank == 0) outputs = std::make_unique<RunOutputs>(request.outputs, config, all);
-      if (!request.restart.empty()) {
-        // A checkpoint of any run: its particles and list weigh the slabs, its springs are
-        // carried into each rank's first list, its counters go on (rank 0 holds the sums).
-        all.set_wall_count(settings.walls.size());
-        dem::CheckpointParts parts = dem::read_checkpoint_parts(request.restart, all);
-        all = std::move(parts.particles);
-        plan = dem::plan_slabs(all, parts.pairs, settings, ranks, axis);
-        dem::collect_springs(all, parts.pairs, springs);
-        resume = parts.state;
-        frames = parts.frames;
-        if (outputs) outputs->continue_series(resume->time_s, frames);
-        if (rank != 0) {
-          resume->large_overlaps = 0;
-          resume->initial_energy = 0.0;
-          resume->removed_count = 0;
-          resume->removed_mass = 0.0;
-        }
-      } else {
-        plan = dem::plan_slabs(all, settings, ranks, axis);
-      }
-      particles = all.size();
-      own = dem::slab_particles(plan.slabs, all, rank);
+      if (rank != 0) return;
+      all = dem::make_particles(config);
+      outputs = std::make_unique<RunOutputs>(request.outputs, config, *all);
+      if (request.restart.empty()) return;
+      // A checkpoint of any run: its particles and list weigh the slabs, its springs are
+      // carried into each rank's first list, its counters go on (rank 0 holds the sums).
+      all->set_wall_count(settings.walls.size());
+      dem::CheckpointParts parts = dem::read_checkpoint_parts(request.restart, *all);
+      all = std::move(parts.particles);
+      all_pairs = std::move(parts.pairs);
+      resume = parts.state;
+      frames = parts.frames;
+      outputs->continue_series(resume->time_s, frames);
     });
+    // The checkpoint's time and counters on every rank (the sums on rank 0 only).
+    int resuming = resume ? 1 : 0;
+    MPI_Bcast(&resuming, 1, MPI_INT, 0, comm);
+    if (resuming != 0) {
+      if (rank != 0) resume.emplace();
+      MPI_Bcast(&*resume, sizeof(dem::Engine::State), MPI_BYTE, 0, comm);
+      if (rank != 0) {
+        resume->large_overlaps = 0;
+        resume->initial_energy = 0.0;
+        resume->removed_count = 0;
+        resume->removed_mass = 0.0;
+      }
+    }
+    dem::mpi::RankStart start = dem::mpi::deal_start(
+        comm, all ? &*all : nullptr, all_pairs ? &*all_pairs : nullptr, settings, axis);
+    all.reset();
+    all_pairs.reset();
+    const dem::SlabPlan& plan = start.plan;
+    const std::uint64_t particles = start.particles;
     settings.skin = plan.skin;  // every rank the same, from all the particles
     dem::mpi::HaloExchange halo(comm, plan.slabs, plan.halo, request.rebalance_margin);
-    halo.seed_springs(std::move(springs));
+    halo.seed_springs(std::move(start.springs));
     // From here every failure may leave other ranks in a collective: it aborts them all.
     std::unique_ptr<dem::Engine> engine;
     try {
-      engine = std::make_unique<dem::Engine>(settings, std::move(own), &halo,
+      engine = std::make_unique<dem::Engine>(settings, std::move(start.own), &halo,
                                              resume ? &*resume : nullptr);
     } catch (const std::exception& e) {
       mpi::abort_all(comm, e.what(), 2);
@@ -161,7 +169,7 @@ int run_dem_mpi(const DemMpiRequest& request) {
     double output_s = 0.0;
     auto output = [&](bool with_checkpoint) {
       if (!frames_or_rows && !(with_checkpoint && checkpoints)) return;
-      const double start = omp_get_wtime();
+      const double began = omp_get_wtime();
       dem::mpi::GatheredRun run = dem::mpi::gather_run(comm, *engine, halo);
       mpi::run_checked(comm, [&] {
         if (outputs) outputs->write(run.snapshot(settings));
@@ -171,7 +179,7 @@ int run_dem_mpi(const DemMpiRequest& request) {
         dem::mpi::write_checkpoint(comm, *engine, halo, std::move(run), written,
                                    outputs ? outputs->checkpoint() : std::string());
       }
-      output_s += omp_get_wtime() - start;
+      output_s += omp_get_wtime() - began;
     };
     MPI_Barrier(comm);
     const double t0 = omp_get_wtime();
@@ -223,7 +231,8 @@ int run_dem_mpi(const DemMpiRequest& request) {
                            hs.migration_s,
                            hs.agreement_s,
                            static_cast<double>(hs.migrated),
-                           static_cast<double>(hs.messages)};
+                           static_cast<double>(hs.messages),
+                           static_cast<double>(mpi::peak_rss_bytes())};
     const std::vector<RankAccount> accounts = gather_accounts(comm, mine);
     mpi::run_checked(comm, [&] {
       if (rank != 0) return;
@@ -235,18 +244,18 @@ int run_dem_mpi(const DemMpiRequest& request) {
           dem::to_string(engine->instruction_set()),
           output_s > 0 ? fmt::format("; {:.3f} s of it gathering and writing outputs", output_s)
                        : "");
-      fmt::print("{:>5} {:>9} {:>8} {:>10} {:>10} {:>10} {:>10} {:>10} {:>10} {:>9}\n", "rank",
-                 "owned", "ghosts", "forces s", "list s", "integr. s", "halo s", "migrate s",
-                 "waits s", "migrated");
+      fmt::print("{:>5} {:>9} {:>8} {:>10} {:>10} {:>10} {:>10} {:>10} {:>10} {:>9} {:>8}\n",
+                 "rank", "owned", "ghosts", "forces s", "list s", "integr. s", "halo s",
+                 "migrate s", "waits s", "migrated", "peak MB");
       double force_max = 0.0, force_sum = 0.0;
       nlohmann::json rows = nlohmann::json::array();
       for (int r = 0; r < ranks; ++r) {
         const RankAccount& a = accounts[r];
         fmt::print(
             "{:>5} {:>9} {:>8} {:>10.3f} {:>10.3f} {:>10.3f} {:>10.3f} {:>10.3f} "
-            "{:>10.3f} {:>9}\n",
+            "{:>10.3f} {:>9} {:>8.0f}\n",
             r, a.owned, a.ghosts, a.force_s, a.neighbor_s, a.integrate_s, a.refresh_s,
-            a.migration_s, a.wait_s, a.migrated);
+            a.migration_s, a.wait_s, a.migrated, a.peak_rss_bytes / 1e6);
         force_max = std::max(force_max, a.force_s);
         force_sum += a.force_s;
         rows.push_back(
@@ -261,6 +270,7 @@ int run_dem_mpi(const DemMpiRequest& request) {
              {"agreement_wait_s", a.wait_s},
              {"migrated", a.migrated},
              {"messages", a.messages},
+             {"peak_rss_bytes", a.peak_rss_bytes},
              {"slab_lo_m", std::isfinite(plan.slabs.cuts[r]) ? nlohmann::json(plan.slabs.cuts[r])
                                                              : nlohmann::json()},
              {"slab_hi_m", std::isfinite(plan.slabs.cuts[r + 1])

@@ -36,7 +36,8 @@ void write_checkpoint(MPI_Comm comm, const Engine& engine, const HaloExchange& h
     springs.insert(springs.end(), reinterpret_cast<const char*>(s),
                    reinterpret_cast<const char*>(s) + sizeof s);
   }
-  const std::vector<char> all_springs = gather_bytes(comm, springs);
+  constexpr std::size_t kEntry = sizeof(std::uint64_t) + 3 * sizeof(double);
+  const std::vector<char> all_springs = gather_bytes(comm, springs, kEntry);
   contactlab::mpi::run_checked(comm, [&] {
     if (contactlab::mpi::rank_of(comm) != 0) return;
     Particles& gathered = run.particles;
@@ -58,7 +59,6 @@ void write_checkpoint(MPI_Comm comm, const Engine& engine, const HaloExchange& h
     for (std::size_t a = 0; a < then.size(); ++a) order[a] = index_of.at(then.id[a]);
     gathered.permute(order);
     std::unordered_map<std::uint64_t, std::size_t> spring_at;
-    constexpr std::size_t kEntry = sizeof(std::uint64_t) + 3 * sizeof(double);
     for (std::size_t at = 0; at < all_springs.size(); at += kEntry) {
       std::uint64_t key = 0;
       std::memcpy(&key, all_springs.data() + at, sizeof key);

@@ -1,6 +1,8 @@
 // A decomposed run gathered on rank 0 (dem_mpi/gather.hpp).
 #include "contactlab/dem_mpi/gather.hpp"
 
+#include <fmt/format.h>
+
 #include <climits>
 
 #include "contactlab/kernels/error.hpp"
@@ -9,30 +11,39 @@
 
 namespace contactlab::dem::mpi {
 
-std::vector<char> gather_bytes(MPI_Comm comm, const std::vector<char>& mine) {
+std::vector<char> gather_bytes(MPI_Comm comm, const std::vector<char>& mine, std::size_t unit) {
   const int ranks = contactlab::mpi::size_of(comm);
   const int rank = contactlab::mpi::rank_of(comm);
-  const auto size = static_cast<long long>(mine.size());
+  // Counted in units (a particle's record, a spring), not bytes: MPI's int counts then reach
+  // 2^31 particles, not 2 GiB.
+  const auto units = static_cast<long long>(mine.size() / unit);
   std::vector<long long> sizes(static_cast<std::size_t>(ranks));
-  MPI_Gather(&size, 1, MPI_LONG_LONG, sizes.data(), 1, MPI_LONG_LONG, 0, comm);
+  MPI_Gather(&units, 1, MPI_LONG_LONG, sizes.data(), 1, MPI_LONG_LONG, 0, comm);
   std::vector<int> counts(static_cast<std::size_t>(ranks)), offsets(counts.size());
   std::vector<char> all;
+  int fits = 1;
   if (rank == 0) {
     long long total = 0;
     for (int r = 0; r < ranks; ++r) {
-      if (sizes[r] > INT_MAX || total + sizes[r] > INT_MAX) {
-        throw InputError(
-            "a run of more than 2 GiB of particle state cannot be gathered on one "
-            "rank yet");
-      }
-      counts[r] = static_cast<int>(sizes[r]);
-      offsets[r] = static_cast<int>(total);
+      if (total + sizes[r] > INT_MAX) fits = 0;
+      counts[r] = fits != 0 ? static_cast<int>(sizes[r]) : 0;
+      offsets[r] = fits != 0 ? static_cast<int>(total) : 0;
       total += sizes[r];
     }
-    all.resize(static_cast<std::size_t>(total));
+    if (fits != 0) all.resize(static_cast<std::size_t>(total) * unit);
   }
-  MPI_Gatherv(mine.data(), static_cast<int>(mine.size()), MPI_BYTE, all.data(), counts.data(),
-              offsets.data(), MPI_BYTE, 0, comm);
+  // Every rank learns whether it fits before the collective that would need it.
+  MPI_Bcast(&fits, 1, MPI_INT, 0, comm);
+  if (fits == 0) {
+    throw InputError(fmt::format("more than {} items of {} bytes cannot be gathered on one rank",
+                                 INT_MAX, unit));
+  }
+  MPI_Datatype item = MPI_DATATYPE_NULL;
+  MPI_Type_contiguous(static_cast<int>(unit), MPI_BYTE, &item);
+  MPI_Type_commit(&item);
+  MPI_Gatherv(mine.data(), static_cast<int>(units), item, all.data(), counts.data(), offsets.data(),
+              item, 0, comm);
+  MPI_Type_free(&item);
   return all;
 }
 
@@ -52,9 +63,9 @@ GatheredRun gather_run(MPI_Comm comm, const Engine& engine, const HaloExchange& 
   run.state.removed_count = static_cast<std::uint64_t>(sums[2]);
   run.state.removed_mass = sums[3];
   run.energies = engine.energies();
-  const std::vector<char> all = gather_bytes(comm, records);
-  run.particles.wall_spring.assign(p.wall_spring.size(), {});
   const std::size_t record = record_bytes(p);
+  const std::vector<char> all = gather_bytes(comm, records, record);
+  run.particles.wall_spring.assign(p.wall_spring.size(), {});
   for (std::size_t at = 0; at < all.size(); at += record)
     read_record(all.data() + at, run.particles);
   return run;

@@ -11,9 +11,9 @@
 
 namespace contactlab::dem::mpi {
 
-// Every rank's bytes concatenated in rank order on rank 0 (empty elsewhere). Collective; throws
-// InputError on rank 0 past 2 GiB (MPI's int counts).
-std::vector<char> gather_bytes(MPI_Comm comm, const std::vector<char>& mine);
+// Every rank's items of `unit` bytes each, concatenated in rank order on rank 0 (empty
+// elsewhere). Collective; every rank throws InputError past 2^31 - 1 items in all.
+std::vector<char> gather_bytes(MPI_Comm comm, const std::vector<char>& mine, std::size_t unit);
 
 struct GatheredRun {
   Particles particles;  // every rank's own particles, in rank order (rank 0; empty elsewhere)
