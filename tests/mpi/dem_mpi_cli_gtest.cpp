@@ -227,6 +227,30 @@ TEST(DemMpiCli, AnUnstableParticleOnOneRankEndsEveryRankWithItsMessage) {
       << run.output;
 }
 
+// A particle flung up out of the lidless box (40 m/s: 0.08 mm a step, under skin/2) is named
+// once it is a box length above it, in one process and by its owner alone on two ranks; the
+// run ends at once rather than growing its grid with the particle's height.
+TEST(DemMpiCli, AParticleFlungOutOfTheDomainIsNamedOnce) {
+  TempDir dir;
+  std::ifstream in(drop_box());
+  nlohmann::json config = nlohmann::json::parse(in);
+  config["particles"] = nlohmann::json::array({{{"position", {0.004, 0.008, 0.02}},
+                                                {"radius", 0.0005},
+                                                {"material", "glass"},
+                                                {"velocity", {0.0, 0.0, 40.0}}}});
+  const std::string path = dir.file("flung.json");
+  std::ofstream(path) << config.dump();
+  const std::string named = "particle 0 at (0.004, 0.008, 0.06";
+  const auto one = run_command(contactlab_exe() + " dem run " + path + " --threads 1 --steps 2000");
+  EXPECT_NE(one.exit_code, 0) << one.output;
+  EXPECT_EQ(count_of(one.output, "more than a box length outside the domain"), 1) << one.output;
+  EXPECT_EQ(count_of(one.output, named), 1) << one.output;
+  const auto two = run_command(mpiexec(2) + contactlab_exe() + " dem run " + path +
+                               " --mpi --axis x --threads 1 --steps 2000");
+  EXPECT_NE(two.exit_code, 0) << two.output;
+  EXPECT_EQ(count_of(two.output, named), 1) << two.output;
+}
+
 TEST(DemMpiCli, AxisWithoutMpiIsRefused) {
   const auto run = run_command(contactlab_exe() + " dem run " + drop_box() + " --axis z");
   EXPECT_NE(run.exit_code, 0);

@@ -212,6 +212,7 @@ DemConfig parse_dem_config(const json& document) {
     for (int a = 0; a < 3; ++a) {
       if (!(s.domain.hi[a] > s.domain.lo[a])) o.field("domain").fail("hi must be above lo");
     }
+    s.domain_bounds_particles = true;
   }
   s.gravity = vec(o, "gravity", Vec3{0, 0, 0});
   s.law = parse_contact(o.field("contact"));

@@ -209,6 +209,7 @@ void Engine::rebuild() {
   // migrants and new ghosts arrive after it, their springs carried along.
   if (halo_ != nullptr) halo_->drop_ghosts(particles_, pairs_, carried_);
   remove_sunk_particles();  // sink.cpp: removals happen at rebuilds only
+  check_containment();      // this process's own particles, once the sink has taken its
   if (halo_ != nullptr) {
     halo_->exchange_particles(particles_, carried_);
     builder_.rebuild(particles_, pairs_, settings_.domain, settings_.skin,
@@ -226,6 +227,36 @@ void Engine::rebuild() {
         std::llround(halo_->sum_over_ranks(static_cast<double>(halo_->owned_count()))));
   }
   refresh_kinematics(prediction_kick());
+}
+
+void Engine::check_containment() const {
+  if (!settings_.domain_bounds_particles) return;
+  const Particles& p = particles_;
+  const Domain& d = settings_.domain;
+  const std::vector<double>* axes[3] = {&p.x, &p.y, &p.z};
+  const auto n = static_cast<std::int64_t>(p.size());
+  std::int64_t first = n;
+#pragma omp parallel for num_threads(settings_.threads) reduction(min : first) schedule(static)
+  for (std::int64_t a = 0; a < n; ++a) {
+    for (int axis = 0; axis < 3; ++axis) {
+      const double c = (*axes[axis])[static_cast<std::size_t>(a)], margin = d.length(axis);
+      if (!d.periodic[axis] && !(c >= d.lo[axis] - margin && c <= d.hi[axis] + margin)) {
+        first = std::min(first, a);
+      }
+    }
+  }
+  if (first == n) return;
+  const std::string what = fmt::format(
+      "more than a box length outside the domain [{:.6g}, {:.6g}] x [{:.6g}, {:.6g}] x [{:.6g}, "
+      "{:.6g}] m",
+      d.lo[0], d.hi[0], d.lo[1], d.hi[1], d.lo[2], d.hi[2]);
+  const auto a = static_cast<std::size_t>(first);
+  if (rebuilds_ == 0) {  // the constructor's build: the input put it there
+    throw InputError(fmt::format("particle {} starts at ({:.9g}, {:.9g}, {:.9g}) m, {}", p.id[a],
+                                 p.x[a], p.y[a], p.z[a], what));
+  }
+  fail("flung " + what + " (a wall missing, or the box too small: widen \"domain\")",
+       static_cast<std::uint32_t>(a));
 }
 
 void Engine::fail(const std::string& what, std::uint32_t index) const {

@@ -59,6 +59,13 @@ struct EngineSettings {
   // The sink (LIGGGHTS `delete` region): particles whose centre is below this height [m] leave
   // the run at the next neighbour-list rebuild, their mass counted (sink.cpp). -inf = no sink.
   double sink_below_z = -std::numeric_limits<double>::infinity();
+  // Whether the domain's box bounds the particles on its non-periodic axes (a config's
+  // `domain`): a particle flung farther than one box length outside it (along a non-periodic
+  // axis) is an UnstableRun naming it at the next rebuild, or an InputError at the start, not a
+  // run whose grid and memory grow with it. Within that margin it runs on: below a hopper's
+  // orifice the outflow spreads wider than the silo's box until the sink takes it. Off for
+  // scenes built in code, whose domain matters for its periodic axes only.
+  bool domain_bounds_particles = false;
 };
 
 // Phase times of step() [s], summed since construction: the neighbour list (candidates, in
@@ -206,6 +213,9 @@ class Engine {
   // sink.cpp: removes the particles below the sink level (particle arrays and the old pair
   // list, renumbered), and indexes the stable ids of the particles left.
   void remove_sunk_particles();
+  // With domain_bounds_particles: the first particle (in order) flung more than a box length
+  // outside the box named (InputError at the start, else UnstableRun).
+  void check_containment() const;
   void index_ids();
   // kin_ from the particle arrays (after a reorder or restore), with the velocities the forces
   // see predicted as v + a kick.
