@@ -7,6 +7,7 @@
 #include <optional>
 #include <variant>
 
+#include "contactlab/kernels/atomic_file.hpp"
 #include "contactlab/kernels/error.hpp"
 #include "contactlab/kernels/scene_io.hpp"
 #include "contactlab/kernels/scene_options.hpp"
@@ -101,6 +102,11 @@ std::string percent(const std::optional<double>& value) {
 }
 
 }  // namespace
+
+void write_json(const std::string& path, const nlohmann::json& doc) {
+  write_file_atomically(path, [&](std::ostream& out) { out << doc.dump(2) << '\n'; });
+  fmt::print("wrote {}\n", path);
+}
 
 void print_counters(const tuner::CounterRecord& c) {
   if (!c.available) {

@@ -5,6 +5,7 @@
 #include <CLI/CLI.hpp>
 #include <cstdint>
 #include <functional>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <utility>
 #include <vector>
@@ -96,5 +97,9 @@ std::vector<std::string> split_list(const std::string& text);
 std::vector<int> int_list(const std::string& text, const char* option);
 
 void print_counters(const tuner::CounterRecord& counters);
+
+// A command's --json document, indented, written atomically (the old file kept on a failure),
+// then "wrote PATH".
+void write_json(const std::string& path, const nlohmann::json& doc);
 
 }  // namespace contactlab::cli

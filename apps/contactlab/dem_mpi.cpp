@@ -327,9 +327,7 @@ int run_dem_mpi(const DemMpiRequest& request) {
             {"potential", energy.potential},
             {"dissipated", energy.dissipated}}},
           {"per_rank", rows}};
-      write_file_atomically(request.json_out,
-                            [&](std::ostream& out) { out << doc.dump(2) << '\n'; });
-      fmt::print("wrote {}\n", request.json_out);
+      write_json(request.json_out, doc);
     });
     return 0;
   });

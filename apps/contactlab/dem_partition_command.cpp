@@ -93,8 +93,7 @@ struct DemPartitionCommand {
            "work crosses r W / R (halfway between two particles); ghosts are the particles "
            "within the halo width of another rank's slab (across the periodic boundary too). "
            "The same plan dem run --mpi starts from."}};
-      write_file_atomically(json_out_, [&](std::ostream& out) { out << doc.dump(2) << '\n'; });
-      fmt::print("wrote {}\n", json_out_);
+      write_json(json_out_, doc);
     }
     return 0;
   }

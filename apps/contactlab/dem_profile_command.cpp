@@ -288,8 +288,7 @@ int DemProfileCommand::run() const {
          "work counts and the layout) over the bandwidth the thread count draws: the probe's "
          "curve, beyond its threads a saturating law towards the stated ceiling. Not modelled: "
          "shared caches as threads are added, j sides landing in other threads' blocks."}};
-    write_file_atomically(json_out_, [&](std::ostream& out) { out << doc.dump(2) << '\n'; });
-    fmt::print("wrote {}\n", json_out_);
+    write_json(json_out_, doc);
   }
   return 0;
 }

@@ -26,11 +26,6 @@ namespace {
 
 namespace tn = contactlab::tuner;
 
-void write_json(const std::string& path, const nlohmann::json& doc) {
-  write_file_atomically(path, [&](std::ostream& out) { out << doc.dump(2) << '\n'; });
-  fmt::print("wrote {}\n", path);
-}
-
 struct EmulateThreadsCommand {
   SceneOptions scene_;
   std::string variants_ =

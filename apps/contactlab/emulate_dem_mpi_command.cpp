@@ -157,8 +157,7 @@ struct EmulateDemMpiCommand {
            "one per rank. Not modelled: the neighbour-list rebuilds' and migrations' extra cost, "
            "waiting caused by run-time imbalance, memory bandwidth shared by a node's ranks, "
            "network contention."}};
-      write_file_atomically(json_out_, [&](std::ostream& out) { out << doc.dump(2) << '\n'; });
-      fmt::print("wrote {}\n", json_out_);
+      write_json(json_out_, doc);
     }
     return 0;
   }

@@ -73,8 +73,7 @@ struct ProbeCommand {
     if (!json_out_.empty()) {
       const nlohmann::json doc = tn::probe_document(
           probe, options, tn::collect_context(command_line_, options.threads.back()));
-      write_file_atomically(json_out_, [&](std::ostream& out) { out << doc.dump(2) << '\n'; });
-      fmt::print("wrote {}\n", json_out_);
+      write_json(json_out_, doc);
     }
     return 0;
   }

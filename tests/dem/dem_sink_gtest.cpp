@@ -19,22 +19,6 @@
 namespace contactlab::dem {
 namespace {
 
-// The small bed over a plate with a 6 mm orifice instead of a floor, thrown down at 1 m/s: a
-// quarter of the columns drain through the hole, past the sink 1 mm below the plate.
-std::pair<EngineSettings, Particles> draining_bed() {
-  auto [settings, particles] = test::small_bed();
-  settings.walls.clear();
-  Wall plate;
-  plate.kind = WallKind::kOrificePlate;
-  plate.name = "plate";
-  plate.point = {0.005, 0.005, 0.0};
-  plate.radius = 0.003;
-  settings.walls.push_back(plate);
-  settings.sink_below_z = -0.001;
-  for (double& vz : particles.vz) vz -= 1.0;
-  return {settings, particles};
-}
-
 double total_mass(const Particles& p) {
   double m = 0.0;
   for (double v : p.mass) m += v;
@@ -54,7 +38,7 @@ std::vector<double> state_by_sparse_id(const Engine& engine) {
 }
 
 TEST(DemSink, RemovesParticlesBelowTheLevelAndCountsTheirMass) {
-  auto [settings, particles] = draining_bed();
+  auto [settings, particles] = test::draining_bed();
   const double mass0 = total_mass(particles);
   const std::size_t n0 = particles.size();
   Engine engine(settings, particles);
@@ -90,7 +74,7 @@ TEST(DemSink, RemovesParticlesBelowTheLevelAndCountsTheirMass) {
 }
 
 TEST(DemSink, CheckpointAfterRemovalsRestartsBitIdentically) {
-  auto [settings, particles] = draining_bed();
+  auto [settings, particles] = test::draining_bed();
   settings.threads = 2;
   Engine whole(settings, particles);
   whole.run_steps(3000);
@@ -159,7 +143,7 @@ INSTANTIATE_TEST_SUITE_P(Formats, DemSinkOlderCheckpoint, ::testing::Values('1',
                          [](const auto& format) { return std::string("Format") + format.param; });
 
 TEST(DemSink, ARunWithoutParticlesGoesOn) {
-  auto [settings, particles] = draining_bed();
+  auto [settings, particles] = test::draining_bed();
   settings.sink_below_z = 1.0;  // above everything: all leave at the first rebuild after start
   Engine engine(settings, particles);
   while (engine.particles().size() > 0 && engine.step_count() < 5000) engine.step();

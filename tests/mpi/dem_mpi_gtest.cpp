@@ -119,6 +119,14 @@ Outcome decomposed(const EngineSettings& settings, const Particles& particles, i
   return out;
 }
 
+// Rank 0's text on every rank (a file path rank 0 chose).
+void broadcast(std::string& text) {
+  int length = static_cast<int>(text.size());
+  MPI_Bcast(&length, 1, MPI_INT, 0, MPI_COMM_WORLD);
+  text.resize(static_cast<std::size_t>(length));
+  MPI_Bcast(text.data(), length, MPI_CHAR, 0, MPI_COMM_WORLD);
+}
+
 // Bitwise, NaN (removed) equal to NaN; the first difference named.
 void expect_same_bits(const std::vector<double>& want, const std::vector<double>& got) {
   ASSERT_EQ(want.size(), got.size());
@@ -149,16 +157,7 @@ TEST_P(DemMpiAxes, TheBedIsTheOneProcessRunToTheLastBit) {
 }
 
 TEST_P(DemMpiAxes, ASinkDrainsTheSameParticlesAndMassWhileTheSlabsAreRebalanced) {
-  auto [settings, particles] = small_bed(150);
-  settings.walls.clear();
-  Wall plate;
-  plate.kind = WallKind::kOrificePlate;
-  plate.name = "plate";
-  plate.point = {0.005, 0.005, 0.0};
-  plate.radius = 0.003;
-  settings.walls.push_back(plate);
-  settings.sink_below_z = -0.001;
-  for (double& vz : particles.vz) vz -= 1.0;
+  auto [settings, particles] = draining_bed();  // dem_sink_gtest's scene
   constexpr std::uint64_t kSteps = 4000;
   const Outcome one = one_process(settings, particles, kSteps);
   // Re-balanced at every rebuild (margin 0): the particles move to new slabs as they drain.
@@ -227,10 +226,7 @@ TEST_P(DemMpiAxes, ACheckpointRestoresInOneProcessAndContinuesBitIdentically) {
   if (rank() == 0) {
     path = ::testing::TempDir() + "/contactlab_dem_mpi_" + std::to_string(::getpid()) + ".chk";
   }
-  int length = static_cast<int>(path.size());
-  MPI_Bcast(&length, 1, MPI_INT, 0, MPI_COMM_WORLD);
-  path.resize(static_cast<std::size_t>(length));
-  MPI_Bcast(path.data(), length, MPI_CHAR, 0, MPI_COMM_WORLD);
+  broadcast(path);
   {
     const std::vector<double> work(particles.size(), 1.0);
     const Slabs slabs = balance_slabs(particles, work, ranks(), GetParam(), settings.domain);
@@ -270,10 +266,7 @@ TEST_P(DemMpiAxes, AOneProcessCheckpointResumesOnTheRanks) {
     first.run_steps(kBefore);
     write_checkpoint(first, 3, path);
   }
-  int length = static_cast<int>(path.size());
-  MPI_Bcast(&length, 1, MPI_INT, 0, MPI_COMM_WORLD);
-  path.resize(static_cast<std::size_t>(length));
-  MPI_Bcast(path.data(), length, MPI_CHAR, 0, MPI_COMM_WORLD);
+  broadcast(path);
   Particles config = particles;
   config.set_wall_count(settings.walls.size());
   CheckpointParts parts = read_checkpoint_parts(path, config);

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <set>
+#include <utility>
 
 namespace contactlab::dem {
 
@@ -12,6 +13,13 @@ namespace {
 double reduction_s(int ranks, const NetworkModel& network) {
   return ranks > 1 ? 2.0 * network.latency_s * std::ceil(std::log2(static_cast<double>(ranks)))
                    : 0.0;
+}
+
+// The particles' work as the slabs weigh it (slabs.hpp): the total, and the mean a particle.
+std::pair<double, double> work_total_and_mean(const Particles& particles, const PairList& pairs) {
+  double total = 0.0;
+  for (const double w : particle_work(particles, pairs)) total += w;
+  return {total, particles.size() > 0 ? total / static_cast<double>(particles.size()) : 0.0};
 }
 
 const std::vector<double>& coordinate(const Particles& p, int axis) {
@@ -25,10 +33,7 @@ std::vector<DemMpiPoint> emulate_dem_mpi_strong(const Particles& particles, cons
                                                 const std::vector<int>& ranks, int axis,
                                                 double seconds_per_work,
                                                 const NetworkModel& network) {
-  const std::vector<double> work = particle_work(particles, pairs);
-  double total = 0.0;
-  for (const double w : work) total += w;
-  const double mean_work = particles.size() > 0 ? total / static_cast<double>(particles.size()) : 0;
+  const auto [total, mean_work] = work_total_and_mean(particles, pairs);
   std::vector<DemMpiPoint> points;
   double one = 0.0;  // the step at one rank
   for (const int r : ranks) {
@@ -85,10 +90,7 @@ std::vector<DemMpiPoint> emulate_dem_mpi_weak(const Particles& particles, const 
                                               const std::vector<int>& ranks, int axis,
                                               double seconds_per_work,
                                               const NetworkModel& network) {
-  const std::vector<double> work = particle_work(particles, pairs);
-  double total = 0.0;
-  for (const double w : work) total += w;
-  const double mean_work = particles.size() > 0 ? total / static_cast<double>(particles.size()) : 0;
+  const auto [total, mean_work] = work_total_and_mean(particles, pairs);
   const SlabPlan plan = plan_slabs(particles, pairs, settings, 1, axis);
   const std::vector<double>& c = coordinate(particles, plan.slabs.axis);
   // A copy's neighbours hold as ghosts its particles within the halo of its two ends, and it
