@@ -161,19 +161,32 @@ def _beverloo(results_dir, out):
         fit = need(b, "$", "fit")
         c, k, r2 = number(fit, "$.fit", "C"), number(fit, "$.fit", "k"), number(fit, "$.fit", "r_squared")
         targets = b.get("targets", {})
+        seeds = b.get("setup", {}).get("seeds", [])
+        interval = (f" (95 % interval over {len(seeds)} fills: C {_span(fit['C_interval'], 3)}, "
+                    f"k {_span(fit['k_interval'], 2)})" if fit.get("C_interval") else "")
         out.append(f"Fit of W = C ρ_b √g (D − k d)^2.5 over the steady orifices "
-                   f"([{relative}]({relative.replace(os.sep, '/')})): C = {c:.3f}, k = {k:.2f}, "
-                   f"R² = {r2:.4f}"
+                   f"([{relative}]({relative.replace(os.sep, '/')})): C = {c:.3f}, k = {k:.2f}"
+                   f"{interval}, R² = {r2:.4f}"
                    + (f"; literature ranges C {targets['C']}, k {targets['k']}: "
                       f"{'inside' if b.get('in_target') else 'outside'}" if 'C' in targets and 'k' in targets else "")
                    + ".\n")
-        rows = [[number(o, f"$.orifices[{i}]", "orifice_over_d"), f"{number(o, f'$.orifices[{i}]', 'rate_kg_s'):.4g}",
-                 "yes" if o.get("steady") else "no", "yes" if o.get("in_fit") else "no"]
-                for i, o in enumerate(need(b, "$", "orifices"))]
-    out.extend(table(["D / d", "rate [kg/s]", "steady", "in fit"], rows))
+        rows = []
+        for i, o in enumerate(need(b, "$", "orifices")):
+            where = f"$.orifices[{i}]"
+            rate = number(o, where, "rate_kg_s")
+            spread = o.get("rate_interval_kg_s")
+            rows.append([number(o, where, "orifice_over_d"), f"{rate:.4g}",
+                         _span(spread, 4, "g") if spread else "-",
+                         len(o.get("seed_rates_kg_s", [rate])),
+                         "yes" if o.get("steady") else "no", "yes" if o.get("in_fit") else "no"])
+    out.extend(table(["D / d", "rate [kg/s]", "95 % interval", "fills", "steady (every fill)", "in fit"], rows))
     png = os.path.join(os.path.dirname(path), "beverloo.png")
     if os.path.exists(png):
         out.append(f"\n![Beverloo]({os.path.join(os.path.dirname(relative), 'beverloo.png').replace(os.sep, '/')})")
+
+
+def _span(bounds, digits, kind="f"):
+    return f"{bounds[0]:.{digits}{kind}} – {bounds[1]:.{digits}{kind}}"
 
 
 def validation_rows(profile):

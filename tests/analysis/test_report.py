@@ -42,6 +42,18 @@ class ReportOnFixture(unittest.TestCase):
                 f.write(b"\x89PNG\r\n\x1a\n")  # only linked, never read
         with open(os.path.join(pit, "pictures.json"), "w") as f:
             json.dump({"pictures": {"a_section.png": "t = 2.50 s: the crater", "b_section.png": "t = 0.70 s: the channel"}}, f)
+        # A Beverloo study of three fills, as scripts/beverloo writes it (values made up).
+        beverloo = os.path.join(cls.temporary, "dem", "beverloo")
+        os.makedirs(beverloo)
+        with open(os.path.join(beverloo, "beverloo.json"), "w") as f:
+            json.dump({"schema_version": 2, "setup": {"seeds": [1, 2, 3]},
+                       "fit": {"C": 0.588, "k": 1.92, "r_squared": 0.9991,
+                               "C_interval": [0.55, 0.62], "k_interval": [1.7, 2.1]},
+                       "targets": {"C": [0.5, 0.65], "k": [1.0, 2.5]}, "in_target": True,
+                       "orifices": [{"orifice_over_d": 6.0, "rate_kg_s": 0.0898,
+                                     "rate_interval_kg_s": [0.08, 0.1],
+                                     "seed_rates_kg_s": [0.08, 0.09, 0.1], "steady": False,
+                                     "in_fit": True}]}, f)
         # The same emulation on two more core radii (the scene-law section compares them).
         with open(os.path.join(FIXTURE, "emulation-threads.json")) as f:
             base = json.load(f)
@@ -210,6 +222,12 @@ class ReportOnFixture(unittest.TestCase):
         # the pictures in time order, linked relative to the report
         crater, channel = dem.index("(../dem/pit/hopper-small/a_section.png)"), dem.index("b_section.png")
         self.assertLess(channel, crater)
+
+    def test_beverloo_gives_intervals_over_the_fills(self):
+        dem = self.section("## Otsuka")
+        self.assertIn("C = 0.588, k = 1.92 (95 % interval over 3 fills: C 0.550 – 0.620, "
+                      "k 1.70 – 2.10)", dem)
+        self.assertEqual(self.row(dem, ["6.0"])[1:], ["0.0898", "0.08 – 0.1", "3", "no", "yes"])
 
     def test_scene_law_compares_core_radii_at_sixteen_threads(self):
         text = self.section("## Which clustering")
