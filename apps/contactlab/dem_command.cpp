@@ -3,11 +3,14 @@
 // time-step study (`dem variants` and `dem profile`: dem_study_command.cpp).
 #include <fmt/core.h>
 #include <omp.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -23,96 +26,14 @@
 #include "contactlab/tuner_dem/force_model.hpp"
 #include "dem_mpi.hpp"
 #include "dem_outputs.hpp"
+#include "dem_run_watch.hpp"
 #include "dem_start.hpp"
+#include "dem_variant_tuning.hpp"
 
 namespace contactlab::cli {
 namespace {
 
 namespace dem = contactlab::dem;
-
-// `dem run --variant auto [--retune]`: the variant the force model chooses at the start and,
-// with --retune, at every neighbour-list rebuild (no timed runs: the pair list priced with the
-// calibrated costs), and the log of which variant ran when.
-class VariantTuning {
- public:
-  VariantTuning(const dem::ForceCosts& costs, double margin)
-      : costs_(costs), retuner_(costs, dem::force_variants({1, 4, 16}), margin) {}
-
-  void start(dem::Engine& engine) {
-    fmt::print("variant auto: force model calibrated by {} runs of {} steps ({:.1f} s)\n",
-               costs_.calibration_runs, costs_.calibration_steps, costs_.calibration_seconds);
-    decide(engine, true);
-  }
-  void after_steps(dem::Engine& engine) {
-    if (engine.rebuilds() == rebuilds_seen_) return;
-    decide(engine, false);
-  }
-  void finish(const dem::Engine& engine, double wall_s) {
-    if (!log_.empty()) log_.back().end_step = engine.step_count();
-    fmt::print(
-        "variants ran ({} decisions at rebuilds, {:.3f} s of pricing, {:.2f} % of the run):\n",
-        decisions_, pricing_s_, 100.0 * pricing_s_ / std::max(wall_s, 1e-9));
-    for (const Entry& e : log_) {
-      fmt::print("  steps {:>9} - {:<9} t = {:<10.6g} {}  (predicted gain {:+.1f} %)\n",
-                 e.begin_step, e.end_step, e.time_s, dem::to_string(e.variant),
-                 100.0 * e.predicted_gain);
-    }
-  }
-  void write_log(const std::string& path) const {
-    write_file_atomically(path, [&](std::ostream& out) {
-      out << "begin_step,end_step,time_s,variant,predicted_gain\n";
-      for (const Entry& e : log_) {
-        out << fmt::format("{},{},{:.9g},{},{:.6g}\n", e.begin_step, e.end_step, e.time_s,
-                           dem::to_string(e.variant), e.predicted_gain);
-      }
-    });
-  }
-
- private:
-  struct Entry {
-    std::uint64_t begin_step = 0, end_step = 0;
-    double time_s = 0.0;
-    dem::ForceVariant variant;
-    double predicted_gain = 0.0;
-  };
-  void decide(dem::Engine& engine, bool first) {
-    const double t0 = omp_get_wtime();
-    rebuilds_seen_ = engine.rebuilds();
-    ++decisions_;
-    // The start leaves the config's variant (the deterministic default unless it names one) by
-    // the same rule as every later switch: only for a predicted gain above the margin. The
-    // calibration times one run per structure, so predictions a few % apart are within its
-    // noise; on hopper-small the start once took update=fused for a predicted 1.7 % and ran
-    // 5.6 % behind the default it left (docs/dem.md).
-    const dem::ForceRetuner::Decision d = retuner_.decide(engine, engine.settings().force_variant);
-    pricing_s_ += omp_get_wtime() - t0;
-    if (first) {
-      fmt::print(
-          "variant auto: starts with {} (the model's best, {}, predicted {:+.1f} % faster "
-          "than {}; margin {:.1f} %: the stated one or the calibration's spread, {:.1f} %, "
-          "whichever is larger)\n",
-          dem::to_string(d.variant), dem::to_string(d.best), 100.0 * d.predicted_gain,
-          dem::to_string(engine.settings().force_variant), 100.0 * retuner_.margin(),
-          100.0 * costs_.calibration_spread);
-    }
-    if (!first && !d.switched) return;
-    engine.set_force_variant(d.variant);
-    if (!log_.empty()) log_.back().end_step = engine.step_count();
-    log_.push_back(
-        {engine.step_count(), engine.step_count(), engine.time_s(), d.variant, d.predicted_gain});
-    if (!first) {
-      fmt::print("step {} (t = {:.6g} s): variant -> {} (predicted gain {:+.1f} %)\n",
-                 engine.step_count(), engine.time_s(), dem::to_string(d.variant),
-                 100.0 * d.predicted_gain);
-    }
-  }
-
-  dem::ForceCosts costs_;
-  dem::ForceRetuner retuner_;
-  std::uint64_t rebuilds_seen_ = 0, decisions_ = 0;
-  double pricing_s_ = 0.0;
-  std::vector<Entry> log_;
-};
 
 struct DemRunCommand {
   std::string config_;
@@ -124,7 +45,11 @@ struct DemRunCommand {
   std::string restart_;
   std::string checkpoint_;
   std::uint64_t steps_ = 0;
+  std::optional<double> until_time_;
   double until_discharged_ = 0.0;
+  std::string resume_;
+  double resume_every_s_ = 600.0;
+  double progress_every_s_ = 0.0;
   bool retune_ = false;
   double retune_margin_ = 0.05;
   std::uint64_t calibration_steps_ = 50;
@@ -135,7 +60,9 @@ struct DemRunCommand {
   std::string json_out_;
   std::string command_line_;
 
-  DemOutputOptions output_options() const { return {vtk_dir_, png_dir_, discharge_, checkpoint_}; }
+  DemOutputOptions output_options() const {
+    return {vtk_dir_, png_dir_, discharge_, resume_.empty() ? checkpoint_ : resume_};
+  }
 
   // --mpi: the run decomposed over the processes (dem_mpi.cpp). The force model behind
   // --variant auto is calibrated on one process's run: it is refused by name.
@@ -144,6 +71,7 @@ struct DemRunCommand {
     request.config = config_;
     request.threads = threads_;
     request.steps = steps_;
+    request.until_time_s = until_time_;
     request.until_discharged = until_discharged_;
     request.axis = axis_;
     request.rebalance_margin = rebalance_margin_;
@@ -163,12 +91,30 @@ struct DemRunCommand {
                            "process): give --variant a name");
         }
       }
+      if (!resume_.empty() || progress_every_s_ > 0) {
+        throw InputError(std::string(!resume_.empty() ? "--resume" : "--progress") +
+                         " is not available with --mpi yet: use --checkpoint and --restart");
+      }
+      check_stopping_and_resuming();
     };
 #ifdef CONTACTLAB_HAVE_MPI
     return run_dem_mpi(request);
 #else
     throw InputError("this contactlab was built without MPI (dem run --mpi)");
 #endif
+  }
+
+  // --steps, --until-time, --resume and their companions, before any work.
+  void check_stopping_and_resuming() const {
+    if (steps_ > 0 && until_time_) throw InputError("--steps and --until-time: give one of them");
+    if (until_time_ && !(*until_time_ >= 0.0)) throw InputError("--until-time must be >= 0");
+    if (!resume_.empty() && (!restart_.empty() || !checkpoint_.empty())) {
+      throw InputError(std::string("--resume and ") +
+                       (!restart_.empty() ? "--restart" : "--checkpoint") +
+                       ": give one of them (--resume restarts from its file and writes it)");
+    }
+    if (!(resume_every_s_ > 0.0)) throw InputError("--resume-every must be > 0 seconds");
+    if (!(progress_every_s_ >= 0.0)) throw InputError("--progress must be >= 0 seconds");
   }
 
   int run() const {
@@ -196,6 +142,10 @@ struct DemRunCommand {
     if (until_discharged_ > 0 && !has_sink) {
       throw InputError("--until-discharged needs a config with a sink");
     }
+    check_stopping_and_resuming();
+    // --resume FILE: continue from FILE where an earlier run of this command left it.
+    const bool resuming = !resume_.empty() && std::filesystem::exists(resume_);
+    const std::string& restart = resuming ? resume_ : restart_;
     // Output folders are made, and output paths checked, before any work.
     if (!variant_log_.empty()) prepare_output_file(variant_log_);
     dem::Particles initial = dem::make_particles(config);
@@ -205,7 +155,7 @@ struct DemRunCommand {
     std::unique_ptr<VariantTuning> tuning;
     if (auto_variant) {
       DemStart start;
-      start.restart = restart_;
+      start.restart = restart;
       tuning = std::make_unique<VariantTuning>(
           dem::calibrate_force_costs([&](const dem::ForceVariant& v,
                                          int t) { return start.engine(config, initial, v, t); },
@@ -213,17 +163,18 @@ struct DemRunCommand {
           retune_margin_);
     }
     dem::Engine engine(settings, std::move(initial));
-    if (!restart_.empty()) {
-      const int frames = dem::read_checkpoint(engine, restart_);
+    if (!restart.empty()) {
+      const int frames = dem::read_checkpoint(engine, restart);
       outputs.continue_series(engine.time_s(), frames);
+      if (resuming) {
+        fmt::print("resuming from {}: step {}, t = {:.6g} s\n", resume_, engine.step_count(),
+                   engine.time_s());
+      }
     }
     const double dt = settings.dt_s;
-    // Steps to the config's end from where the (restarted) run stands (a restart may change
-    // dt), or --steps N from there.
-    const double remaining_s = std::max(0.0, config.end_time_s - engine.time_s());
-    const std::uint64_t total_steps =
-        engine.step_count() +
-        (steps_ > 0 ? steps_ : static_cast<std::uint64_t>(std::llround(remaining_s / dt)));
+    // Steps from where the (restarted) run stands (a restart may change dt).
+    const std::uint64_t total_steps = last_step_of_run(engine.step_count(), engine.time_s(), dt,
+                                                       steps_, until_time_, config.end_time_s);
     const std::uint64_t every =
         config.output_every_s > 0
             ? std::max<std::uint64_t>(
@@ -246,6 +197,20 @@ struct DemRunCommand {
     const double t0 = omp_get_wtime();
     const std::uint64_t first_step = engine.step_count();
     const std::uint64_t first_particle_steps = engine.particle_steps();
+    // With --resume the outputs keep the config's cadence from step 0, so a run resumed from a
+    // checkpoint taken between outputs writes its frames where an unbroken run would have.
+    const std::uint64_t cadence_origin = resume_.empty() ? first_step : 0;
+    const bool ends_at_config_end = steps_ == 0 && !until_time_;
+    RunWatch watch({.progress_every_s = progress_every_s_,
+                    .terminal = ::isatty(STDERR_FILENO) != 0,
+                    .checkpoint_every_s = resume_.empty() ? 0.0 : resume_every_s_,
+                    .stop_on_signal = !resume_.empty()},
+                   engine, total_steps);
+    auto write_checkpoint = [&] {
+      if (checkpoint.empty()) return;
+      dem::write_checkpoint(engine, outputs.frames(), checkpoint);
+      watch.checkpoint_written();
+    };
     // Between outputs the steps run as one batch (each finish drifts the next step). The
     // re-tuner and --until-discharged look after each neighbour-list rebuild (the only step that
     // changes the pair list or the discharged mass): their batches end there.
@@ -253,14 +218,29 @@ struct DemRunCommand {
                                                           : dem::Engine::BatchEnd::kAfterSteps;
     try {
       while (engine.step_count() < total_steps) {
-        const std::uint64_t to_output = every - (engine.step_count() - first_step) % every;
-        engine.run_steps(std::min(to_output, total_steps - engine.step_count()), end);
+        const std::uint64_t to_output = every - (engine.step_count() - cadence_origin) % every;
+        engine.run_steps(watch.batch_steps(std::min(to_output, total_steps - engine.step_count())),
+                         end);
         if (tuning && retune_) tuning->after_steps(engine);
+        watch.after_batch(engine, has_sink ? engine.removed_mass() / start_mass : -1.0);
         const bool empty = engine.particles().size() == 0;
-        if ((engine.step_count() - first_step) % every == 0 || engine.step_count() == total_steps ||
-            empty) {
+        // A stop short of the config's end writes a frame there, except under --resume, whose
+        // series must stay the unbroken run's: its checkpoint holds the stop instead.
+        const bool stop = engine.step_count() == total_steps;
+        if ((engine.step_count() - cadence_origin) % every == 0 || empty ||
+            (stop && (resume_.empty() || ends_at_config_end))) {
           output();
-          if (!checkpoint.empty()) dem::write_checkpoint(engine, outputs.frames(), checkpoint);
+          write_checkpoint();
+        } else if (watch.checkpoint_due() || (stop && !resume_.empty())) {
+          write_checkpoint();
+        }
+        if (const int signal = watch.stop_signal()) {
+          write_checkpoint();
+          fmt::print(stderr,
+                     "contactlab: stopped by signal {} at step {} (t = {:.6g} s): {} holds the "
+                     "run; the same command continues it\n",
+                     signal, engine.step_count(), engine.time_s(), checkpoint);
+          return 128 + signal;
         }
         if (empty) {
           fmt::print("every particle has left through the sink by t = {:.6g} s: stopping\n",
@@ -269,7 +249,7 @@ struct DemRunCommand {
         }
         if (stop_mass > 0 && engine.removed_mass() >= stop_mass) {
           output();
-          if (!checkpoint.empty()) dem::write_checkpoint(engine, outputs.frames(), checkpoint);
+          write_checkpoint();
           fmt::print(
               "the sink has taken {:.6g} kg of {:.6g} kg (--until-discharged {:g}) by t = "
               "{:.6g} s: stopping\n",
@@ -283,6 +263,7 @@ struct DemRunCommand {
     }
     outputs.finish();
     const double wall = omp_get_wtime() - t0;
+    watch.finish(wall, engine.step_count() == total_steps);
     const double steps = static_cast<double>(engine.step_count() - first_step);
     const dem::Energies e = engine.energies();
     const dem::PhaseTimes& ph = engine.phase_times();
@@ -412,6 +393,18 @@ Subcommand add_dem_command(CLI::App& app, const std::string& command_line) {
   run_app->add_option("--steps", run->steps_,
                       "run N steps from where the run stands (default 0: to the config's end)");
   run_app->add_option("--restart", run->restart_, "continue from a checkpoint of this config");
+  run_app->add_option("--until-time", run->until_time_,
+                      "run up to this simulated time [s] (absolute: a resumed run stops at the "
+                      "same step), instead of the config's end");
+  run_app->add_option("--resume", run->resume_,
+                      "continue from this checkpoint when it exists, else start; it is written at "
+                      "every output, every --resume-every seconds and on SIGINT/SIGTERM, so the "
+                      "same command run again continues where the last one stopped");
+  run_app->add_option("--resume-every", run->resume_every_s_,
+                      "--resume: wall seconds between checkpoints (default 600)");
+  run_app->add_option("--progress", run->progress_every_s_,
+                      "a progress line on stderr at least every this many wall seconds (share "
+                      "done, simulated time, rate, time left; a terminal shows a bar anyway)");
   run_app->add_option("--until-discharged", run->until_discharged_,
                       "stop once the sink has taken this fraction of the mass (e.g. 0.5)");
   run_app->add_flag("--mpi", run->mpi_,

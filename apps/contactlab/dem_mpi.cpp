@@ -24,6 +24,7 @@
 #include "contactlab/kernels/error.hpp"
 #include "contactlab/mpi/runtime.hpp"
 #include "contactlab/tuner/context.hpp"
+#include "dem_run_watch.hpp"
 #include "mpi_errors.hpp"
 
 namespace contactlab::cli {
@@ -128,13 +129,10 @@ int run_dem_mpi(const DemMpiRequest& request) {
     } catch (const std::exception& e) {
       mpi::abort_all(comm, e.what(), 2);
     }
-    // --steps N from where the run stands, or to the config's end.
+    // --steps N from where the run stands, --until-time, or to the config's end.
     const std::uint64_t total_steps =
-        engine->step_count() +
-        (request.steps > 0
-             ? request.steps
-             : static_cast<std::uint64_t>(std::llround(
-                   std::max(0.0, config.end_time_s - engine->time_s()) / settings.dt_s)));
+        last_step_of_run(engine->step_count(), engine->time_s(), settings.dt_s, request.steps,
+                         request.until_time_s, config.end_time_s);
     const double start_mass = halo.sum_over_ranks([&] {
       double m = 0.0;
       for (std::size_t a = 0; a < engine->particles().size(); ++a) {

@@ -4,6 +4,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <optional>
 #include <string>
 
 #include "dem_outputs.hpp"
@@ -13,9 +14,10 @@ namespace contactlab::cli {
 struct DemMpiRequest {
   std::string config;
   int threads = 0;
-  std::uint64_t steps = 0;        // 0: to the config's end
-  double until_discharged = 0.0;  // 0: off
-  std::string axis;               // empty: the longest
+  std::uint64_t steps = 0;             // 0: to the config's end
+  std::optional<double> until_time_s;  // absolute simulated time; unset: the config's end
+  double until_discharged = 0.0;       // 0: off
+  std::string axis;                    // empty: the longest
   double rebalance_margin = 0.1;  // re-cut the slabs when the largest work exceeds the mean by it
   std::string variant;            // a force variant by name; empty: the config's
   std::string json_out;

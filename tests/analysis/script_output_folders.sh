@@ -43,6 +43,7 @@ expect_blocked retune-study $py scripts/retune-study --quick --contactlab "$B" -
 expect_blocked detect-compare $py scripts/detect-compare /bin/false /bin/false \
   --scene "s=$blocker:0.05" --variant particle/sorted/full/static --json "$blocker/a/b/c.json"
 expect_blocked bench-compare $py scripts/bench-compare /bin/false /bin/false --json "$blocker/a/c.json"
+expect_blocked large-scenes $py scripts/large-scenes --contactlab /bin/false --json "$blocker/a/c.json"
 expect_blocked dem-isa-compare $py scripts/dem-isa-compare --run a=/bin/false \
   --config experiments/dem/drop-box.json --restart "$blocker" --json "$blocker/a/c.json"
 
@@ -50,6 +51,8 @@ expect_blocked dem-isa-compare $py scripts/dem-isa-compare --run a=/bin/false \
 # detect-compare's --json folder with a run of two detections.
 expect_made beverloo-made "$dir/bev/a/b" $py scripts/beverloo --quick --contactlab /bin/false \
   --out "$dir/bev/a/b"
+expect_made large-scenes-made "$dir/large/a" $py scripts/large-scenes --contactlab /bin/false \
+  --json "$dir/large/a/b.json"
 expect_made retune-made "$dir/ret/a/b" $py scripts/retune-study --quick --contactlab /bin/false \
   --out "$dir/ret/a/b"
 "$B" scene --kind uniform --n 500 -D 0.05 --out "$dir/s.bin" >/dev/null || exit 1

@@ -99,20 +99,22 @@ TEST(DemSink, CheckpointAfterRemovalsRestartsBitIdentically) {
 }
 
 // Checkpoints written before the sink existed (format 1: no sink counters) are still read.
-// A checkpoint of this build rewritten in an older format: format 2 carries six arrays of
-// synchronised velocities after wz (any values: they are dropped), format 1 lacks the sink's
-// counters besides.
+// A checkpoint of this build rewritten in an older format: format 3 lacks the time base (the
+// time then restarts from the checkpoint's), format 2 also carries six arrays of synchronised
+// velocities after wz (any values: they are dropped), format 1 lacks the sink's counters besides.
 std::string older_checkpoint(std::string bytes, std::size_t n, char version) {
   // Magic (8), three counts (24), frames (4), time, step, rebuilds, overlaps, energy (40), the
-  // sink's two counters (16); then each array is its length (8) and its elements: id (4 bytes
-  // each), material and contacts (2), x, y, z, v and w (8).
+  // sink's two counters (16), the time base (16); then each array is its length (8) and its
+  // elements: id (4 bytes each), material and contacts (2), x, y, z, v and w (8).
   constexpr std::size_t kHeader = 92;
+  bytes.erase(kHeader, 16);
+  bytes[7] = version;
+  if (version == '3') return bytes;
   const std::size_t after_w = kHeader + (8 + 4 * n) + 2 * (8 + 2 * n) + 9 * (8 + 8 * n);
   std::string array(8 + 8 * n, '\0');
   const std::uint64_t length = n;
   std::memcpy(array.data(), &length, 8);
   for (int k = 0; k < 6; ++k) bytes.insert(after_w, array);
-  bytes[7] = version;
   if (version == '1') bytes.erase(76, 16);
   return bytes;
 }
@@ -139,7 +141,7 @@ TEST_P(DemSinkOlderCheckpoint, IsStillRead) {
   EXPECT_TRUE(test::bitwise_equal(state_by_sparse_id(restored), state_by_sparse_id(original)));
 }
 
-INSTANTIATE_TEST_SUITE_P(Formats, DemSinkOlderCheckpoint, ::testing::Values('1', '2'),
+INSTANTIATE_TEST_SUITE_P(Formats, DemSinkOlderCheckpoint, ::testing::Values('1', '2', '3'),
                          [](const auto& format) { return std::string("Format") + format.param; });
 
 TEST(DemSink, ARunWithoutParticlesGoesOn) {

@@ -84,14 +84,19 @@ TEST(DemMpiCli, ACheckpointOfOneProcessRestartsOnThreeRanks) {
 // The force model behind --variant auto is calibrated in one process: refused by name, on
 // every rank, at once.
 TEST(DemMpiCli, WhatMpiDoesNotSupportIsOneMessageOnEveryRankCount) {
-  const auto start = std::chrono::steady_clock::now();
-  const auto run = run_command(mpiexec(2) + contactlab_exe() + " dem run " + drop_box() +
-                               " --mpi --steps 10 --variant auto");
-  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 30.0);
-  EXPECT_NE(run.exit_code, 0) << run.output;
-  EXPECT_EQ(count_of(run.output, "contactlab: error:"), 1) << run.output;
-  EXPECT_NE(run.output.find("--variant auto is not available with --mpi"), std::string::npos)
-      << run.output;
+  const std::pair<std::string, std::string> cases[] = {
+      {"--variant auto", "--variant auto is not available with --mpi"},
+      {"--resume " + ::testing::TempDir() + "never.chk", "--resume is not available with --mpi"}};
+  for (const auto& [flags, message] : cases) {
+    const auto start = std::chrono::steady_clock::now();
+    const auto run = run_command(mpiexec(2) + contactlab_exe() + " dem run " + drop_box() +
+                                 " --mpi --steps 10 " + flags);
+    EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(),
+              30.0);
+    EXPECT_NE(run.exit_code, 0) << run.output;
+    EXPECT_EQ(count_of(run.output, "contactlab: error:"), 1) << run.output;
+    EXPECT_NE(run.output.find(message), std::string::npos) << run.output;
+  }
 }
 
 // The rows of a CSV after its header, each split at the commas.

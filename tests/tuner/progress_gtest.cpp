@@ -86,5 +86,27 @@ TEST(ProgressBar, AnUnfinishedTerminalLineIsEndedByTheDestructor) {
   EXPECT_EQ(text.back(), '\n');
 }
 
+TEST(ProgressBar, PlainIntervalLinesCarryTheDetailBetweenQuarters) {
+  std::FILE* file = std::tmpfile();
+  ASSERT_NE(file, nullptr);
+  {
+    ProgressBar bar("dem run", file, false);
+    bar.set_plain_interval(1e-9);  // every update is due
+    bar.update(0.1, 7300.0, "t = 0.06 s");
+    bar.update(0.3, -1.0, "t = 0.18 s");  // a quarter crossed: the quarter's line
+  }
+  const std::string text = written(file);
+  std::fclose(file);
+  EXPECT_EQ(text,
+            "contactlab: dem run: 10.0 % after 0 s, t = 0.06 s, about 2 h 01 min left\n"
+            "contactlab: dem run: 25 % after 0 s, t = 0.18 s\n");
+}
+
+TEST(ProgressBar, HoursAreShownAsHoursAndMinutes) {
+  EXPECT_EQ(format_seconds(59.4), "59 s");
+  EXPECT_EQ(format_seconds(3599.0), "59 min 59 s");
+  EXPECT_EQ(format_seconds(3600.0 + 7 * 60 + 59), "1 h 07 min");
+}
+
 }  // namespace
 }  // namespace contactlab::tuner

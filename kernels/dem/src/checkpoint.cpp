@@ -18,7 +18,7 @@ namespace {
 // Format 2 added the sink's counters; particles may be fewer than the config's (removed).
 // Format 3 dropped the six arrays of synchronised velocities (the engine predicts them from
 // v and f at the next step; formats 1 and 2 still carry them, read and dropped).
-constexpr char kMagic[8] = {'C', 'L', 'D', 'E', 'M', 'C', 'K', '3'};
+constexpr char kMagic[8] = {'C', 'L', 'D', 'E', 'M', 'C', 'K', '4'};
 
 template <class T>
 void put(std::ostream& out, const T& v) {
@@ -81,6 +81,8 @@ void write_checkpoint(const Engine::State& state, const Particles& particles, co
         put(out, s.initial_energy);
         put(out, s.removed_count);
         put(out, s.removed_mass);
+        put(out, s.base_time_s);
+        put(out, s.base_step);
         p.for_each_array([&](const auto& v) { put_array(out, v); });
         put_array(out, q.i);
         put_array(out, q.j);
@@ -97,7 +99,7 @@ CheckpointParts read_checkpoint_parts(const std::string& path, const Particles& 
   if (!file) throw InputError("cannot open checkpoint '" + path + "'");
   char magic[8];
   file.read(magic, sizeof magic);
-  // Formats 1 (before the sink: no sink counters) and 2 are read too.
+  // Formats 1 (before the sink: no sink counters), 2 and 3 are read too.
   const char version = file && std::memcmp(magic, kMagic, 7) == 0 ? magic[7] : '\0';
   if (version < '1' || version > kMagic[7]) {
     throw InputError(path + ": not a contactlab DEM checkpoint");
@@ -125,6 +127,9 @@ CheckpointParts read_checkpoint_parts(const std::string& path, const Particles& 
     s.removed_count = in.get<std::uint64_t>();
     s.removed_mass = in.get<double>();
   }
+  // Format 4 adds the time base; before it, the time restarts from the checkpoint's.
+  s.base_time_s = version >= '4' ? in.get<double>() : s.time_s;
+  s.base_step = version >= '4' ? in.get<std::uint64_t>() : s.step;
   Particles p = config;
   p.for_each_array([&](auto& v) {
     in.array(v, n);

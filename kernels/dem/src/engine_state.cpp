@@ -72,8 +72,14 @@ Energies Engine::local_energies() const {
 void Engine::set_counters(const State& state) {
   drifted_ = false;  // restored whole: no step is half done
   time_s_ = state.time_s;
-  base_time_s_ = state.time_s;
-  base_step_ = state.step;
+  // The run's time base where it gives the state's time with this dt (the run goes on as it
+  // would have); otherwise (dt changed, or a state without one) the time restarts from here.
+  const bool base_holds =
+      state.base_step <= state.step &&
+      state.base_time_s + static_cast<double>(state.step - state.base_step) * settings_.dt_s ==
+          state.time_s;
+  base_time_s_ = base_holds ? state.base_time_s : state.time_s;
+  base_step_ = base_holds ? state.base_step : state.step;
   step_ = state.step;
   rebuilds_ = state.rebuilds;
   large_overlaps_ = state.large_overlaps;

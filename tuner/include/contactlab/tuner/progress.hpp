@@ -25,7 +25,11 @@ class ProgressBar {
   ProgressBar(const ProgressBar&) = delete;
   ProgressBar& operator=(const ProgressBar&) = delete;
 
-  void update(double done, double seconds_left);
+  // `detail` (e.g. "t = 0.2 s, 21 M particle-steps/s") follows the share on every line.
+  void update(double done, double seconds_left, const std::string& detail = {});
+  // Plain lines: also one whenever this many seconds have passed since the last (a run of
+  // hours logs more than its quarters); 0 (the default): the quarters only.
+  void set_plain_interval(double seconds) { plain_every_s_ = seconds; }
   // The last line: 100 % and the step's seconds (a terminal's line is ended).
   void finish(double seconds);
   ProgressMeter meter() {
@@ -39,11 +43,13 @@ class ProgressBar {
   bool open_line_ = false;  // a terminal line drawn and not yet ended
   bool finished_ = false;
   int quarters_shown_ = 0;     // plain lines: quarters already written
-  double last_draw_s_ = -1.0;  // terminal: when the line was last drawn (omp_get_wtime)
+  double last_draw_s_ = -1.0;  // terminal: when the line was last drawn (steady clock)
+  double plain_every_s_ = 0.0;
   double start_s_;
+  double last_plain_s_;  // plain: when the last line was written
 };
 
-// "12 s", "3 min 05 s".
+// "12 s", "3 min 05 s", "2 h 07 min".
 std::string format_seconds(double seconds);
 
 }  // namespace contactlab::tuner

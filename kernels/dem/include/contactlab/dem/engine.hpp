@@ -191,10 +191,14 @@ class Engine {
     double initial_energy = 0.0;
     std::uint64_t removed_count = 0;
     double removed_mass = 0.0;
+    // The time is base + (step - base_step) dt, not a running sum; a restart that keeps the
+    // base (same dt) gives the unbroken run's times to the last bit.
+    double base_time_s = 0.0;
+    std::uint64_t base_step = 0;
   };
   State state() const {
-    return {time_s_,         step_,          rebuilds_,    large_overlaps_,
-            initial_energy_, removed_count_, removed_mass_};
+    return {time_s_,        step_,         rebuilds_,    large_overlaps_, initial_energy_,
+            removed_count_, removed_mass_, base_time_s_, base_step_};
   }
   // Replaces the state with a checkpoint's (particles and pairs as saved, CSR rebuilt).
   void restore(const State& state, Particles particles, PairList pairs);

@@ -1,0 +1,102 @@
+#include "dem_run_watch.hpp"
+
+#include <fmt/core.h>
+#include <omp.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace contactlab::cli {
+namespace {
+
+volatile std::sig_atomic_t g_stop_signal = 0;
+
+extern "C" void ask_to_stop(int signal) { g_stop_signal = signal; }
+
+}  // namespace
+
+std::uint64_t last_step_of_run(std::uint64_t step_now, double time_now_s, double dt_s,
+                               std::uint64_t steps, std::optional<double> until_time_s,
+                               double config_end_s) {
+  if (steps > 0) return step_now + steps;
+  const double end = until_time_s.value_or(config_end_s);
+  return step_now +
+         static_cast<std::uint64_t>(std::llround(std::max(0.0, end - time_now_s) / dt_s));
+}
+
+RunWatch::RunWatch(const RunWatchOptions& options, const dem::Engine& engine,
+                   std::uint64_t last_step)
+    : options_(options),
+      watching_(options.progress_every_s > 0.0 || options.terminal ||
+                options.checkpoint_every_s > 0.0 || options.stop_on_signal),
+      first_step_(engine.step_count()),
+      last_step_(last_step),
+      last_batch_end_step_(first_step_),
+      first_particle_steps_(engine.particle_steps()),
+      start_s_(omp_get_wtime()),
+      last_batch_end_s_(start_s_),
+      last_checkpoint_s_(start_s_) {
+  if (options.progress_every_s > 0.0 || options.terminal) {
+    bar_.emplace("dem run", stderr, options.terminal);
+    bar_->set_plain_interval(options.progress_every_s);
+  }
+  if (options.stop_on_signal) {
+    g_stop_signal = 0;
+    previous_int_ = std::signal(SIGINT, ask_to_stop);
+    previous_term_ = std::signal(SIGTERM, ask_to_stop);
+  }
+}
+
+RunWatch::~RunWatch() {
+  if (options_.stop_on_signal) {
+    std::signal(SIGINT, previous_int_);
+    std::signal(SIGTERM, previous_term_);
+  }
+}
+
+std::uint64_t RunWatch::batch_steps(std::uint64_t wanted) const {
+  if (!watching_) return wanted;
+  const std::uint64_t about_a_second =
+      steps_per_s_ > 0.0 ? static_cast<std::uint64_t>(std::max(1.0, steps_per_s_)) : 8;
+  return std::min(wanted, about_a_second);
+}
+
+void RunWatch::after_batch(const dem::Engine& engine, double discharged) {
+  const double now = omp_get_wtime();
+  const std::uint64_t step = engine.step_count();
+  if (now > last_batch_end_s_ && step > last_batch_end_step_) {
+    steps_per_s_ = static_cast<double>(step - last_batch_end_step_) / (now - last_batch_end_s_);
+  }
+  last_batch_end_s_ = now;
+  last_batch_end_step_ = step;
+  if (!bar_) return;
+  const double wall = now - start_s_;
+  const double span = static_cast<double>(std::max<std::uint64_t>(1, last_step_ - first_step_));
+  const double done = static_cast<double>(step - first_step_) / span;
+  const double rate =
+      static_cast<double>(engine.particle_steps() - first_particle_steps_) / std::max(wall, 1e-9);
+  // The time left at the run's own rate so far (its contacts change as it goes; the rate over
+  // the whole run is steadier than the last batch's).
+  const double steps_rate = static_cast<double>(step - first_step_) / std::max(wall, 1e-9);
+  const double left = step > first_step_ ? static_cast<double>(last_step_ - step) / steps_rate : -1;
+  std::string detail = fmt::format("step {}, t = {:.6g} s, {:.3g} M particle-steps/s", step,
+                                   engine.time_s(), rate / 1e6);
+  if (discharged >= 0.0) detail += fmt::format(", {:.1f} % discharged", 100.0 * discharged);
+  bar_->update(done, left, detail);
+}
+
+bool RunWatch::checkpoint_due() const {
+  return options_.checkpoint_every_s > 0.0 &&
+         omp_get_wtime() - last_checkpoint_s_ >= options_.checkpoint_every_s;
+}
+
+void RunWatch::checkpoint_written() { last_checkpoint_s_ = omp_get_wtime(); }
+
+int RunWatch::stop_signal() const { return options_.stop_on_signal ? g_stop_signal : 0; }
+
+void RunWatch::finish(double wall_s, bool completed) {
+  if (bar_ && completed) bar_->finish(wall_s);
+}
+
+}  // namespace contactlab::cli
