@@ -62,6 +62,18 @@ std::pair<Scene, tuner::SceneRecord> SceneOptions::load() const {
   return {std::move(scene), std::move(record)};
 }
 
+void NetworkOptions::add_to(CLI::App& app) {
+  app.add_option("--latency", latency_s, "network latency per message [s] (1.5e-6)");
+  app.add_option("--bandwidth", bandwidth, "network bandwidth [bytes/s] (5e9)");
+  app.add_option("--network-source", source, "where the network figures come from");
+}
+
+void NetworkOptions::check() const {
+  if (!(latency_s >= 0.0) || !(bandwidth > 0.0)) {
+    throw InputError("--latency must be >= 0 and --bandwidth > 0");
+  }
+}
+
 std::vector<std::string> split_list(const std::string& text) {
   std::vector<std::string> items;
   std::size_t pos = 0;

@@ -91,6 +91,18 @@ struct SceneOptions {
 };
 
 // "a,b,c" -> {"a", "b", "c"}; throws InputError on an empty item.
+// The stated network of the MPI emulations (`emulate mpi`, `emulate dem-mpi`): latency per
+// message, bandwidth per link and where the figures come from (each command states its own
+// default source).
+struct NetworkOptions {
+  double latency_s = 1.5e-6;
+  double bandwidth = 5.0e9;  // bytes/s
+  std::string source;
+
+  void add_to(CLI::App& app);
+  void check() const;  // InputError for latency < 0 or bandwidth <= 0
+};
+
 std::vector<std::string> split_list(const std::string& text);
 // "1,2,4" -> {1, 2, 4}; throws InputError naming `option` on an item that is not a whole
 // number >= 1.

@@ -133,11 +133,9 @@ struct EmulateMpiCommand {
   std::string processes_ = "1,2,4,8,16,32,64,128,256,512,1024";
   int threads_per_rank_ = 16;
   std::uint32_t block_ = 200;
-  double latency_s_ = 1.5e-6;
-  double bandwidth_ = 5.0e9;
-  std::string network_source_ =
-      "Tofu interconnect of the FX10 as commonly cited (about 1.5 us MPI latency, 5 GB/s per "
-      "link and direction); not measured here";
+  NetworkOptions network_{.source =
+                              "Tofu interconnect of the FX10 as commonly cited (about 1.5 us MPI "
+                              "latency, 5 GB/s per link and direction); not measured here"};
   std::vector<std::string> measured_;
   int rounds_ = 5;
   bool measure_slowest_ = true;
@@ -154,9 +152,7 @@ int EmulateMpiCommand::run() const {
   if (!json_out_.empty()) prepare_output_file(json_out_);
   if (threads_per_rank_ < 1) throw InputError("--threads-per-rank must be >= 1");
   if (block_ < 1) throw InputError("--block must be >= 1");
-  if (!(latency_s_ >= 0.0) || !(bandwidth_ > 0.0)) {
-    throw InputError("--latency must be >= 0 and --bandwidth > 0");
-  }
+  network_.check();
   const std::vector<int> processes = int_list(processes_, "--processes");
   std::vector<MeasuredMpiRun> measured;
   for (const std::string& path : measured_) measured.push_back(read_mpi_run(path));
@@ -178,7 +174,7 @@ int EmulateMpiCommand::run() const {
   const LoopWork work = kernel.iteration_work(variant, 1);
   const tn::WorkView view{work.tests, work.homes, work.builds};
   const tn::PreparedWork prepared(view);
-  const tn::CommunicationModel network{latency_s_, bandwidth_, network_source_};
+  const tn::CommunicationModel network{network_.latency_s, network_.bandwidth, network_.source};
 
   // Timed here, in interleaved rounds so that a slow spell of the machine touches all alike:
   // the whole loop at one thread (the anchor), a rank with no block (the fixed cost) and, for
@@ -296,8 +292,8 @@ int EmulateMpiCommand::run() const {
   fmt::print(
       "emulate mpi: N {}, D {}, {}; one-thread T_c {:.5f} s (median of {}), of which fixed "
       "{:.6f} s (a rank with no block); network {} s + bytes / {:.3g} B/s\n",
-      scene.size(), diameter, to_string(variant), one_thread_s, rounds_, fixed_s, latency_s_,
-      bandwidth_);
+      scene.size(), diameter, to_string(variant), one_thread_s, rounds_, fixed_s,
+      network_.latency_s, network_.bandwidth);
   nlohmann::json series_json = nlohmann::json::array();
   for (const Series& s : series) {
     fmt::print("\n{} (predicted)\n  {:>9} {:>6} {:>12} {:>12} {:>9} {:>10}\n", s.label, "processes",
@@ -381,9 +377,9 @@ int EmulateMpiCommand::run() const {
         {"one_thread_detect_s", one_thread_s},
         {"loop_fixed_s", fixed_s},
         {"model",
-         {{"latency_s", latency_s_},
-          {"bandwidth_bytes_per_s", bandwidth_},
-          {"source", network_source_},
+         {{"latency_s", network_.latency_s},
+          {"bandwidth_bytes_per_s", network_.bandwidth},
+          {"source", network_.source},
           {"compute",
            "replicated: each rank's blocks (block-cyclic) replayed under the variant's schedule "
            "with its threads, priced by the calibrated machine costs scaled to this scene's "
@@ -443,9 +439,7 @@ Subcommand add_emulate_command(CLI::App& app, const std::string& command_line) {
   m->add_option("--processes", mpi->processes_, "process counts (1,2,4,...,1024)");
   m->add_option("--threads-per-rank", mpi->threads_per_rank_, "hybrid: threads per rank (16)");
   m->add_option("--block", mpi->block_, "replicated: block of the block-cyclic deal (200)");
-  m->add_option("--latency", mpi->latency_s_, "network latency per message [s] (1.5e-6)");
-  m->add_option("--bandwidth", mpi->bandwidth_, "network bandwidth [bytes/s] (5e9)");
-  m->add_option("--network-source", mpi->network_source_, "where the network figures come from");
+  mpi->network_.add_to(*m);
   m->add_option("--measured", mpi->measured_,
                 "detect --mpi replicated --json result files to check the model against")
       ->delimiter(',');

@@ -32,11 +32,9 @@ struct EmulateDemMpiCommand {
   std::string ranks_ = "1,2,4,8,16,32,64,128,256,512,1024";
   std::string axis_;
   std::uint64_t steps_ = 100;
-  double latency_s_ = 1.5e-6;
-  double bandwidth_ = 5.0e9;
-  std::string network_source_ =
-      "an InfiniBand-class network as commonly cited (about 1.5 us MPI latency, 5 GB/s per link "
-      "and direction); not measured here";
+  NetworkOptions network_{.source =
+                              "an InfiniBand-class network as commonly cited (about 1.5 us MPI "
+                              "latency, 5 GB/s per link and direction); not measured here"};
   std::string measured_;
   std::string json_out_;
   std::string command_line_;
@@ -45,9 +43,7 @@ struct EmulateDemMpiCommand {
     const std::vector<int> ranks = int_list(ranks_, "--ranks");
     const int axis = axis_.empty() ? -1 : dem::parse_axis(axis_);
     if (steps_ == 0) throw InputError("--steps must be >= 1");
-    if (!(latency_s_ >= 0) || !(bandwidth_ > 0)) {
-      throw InputError("--latency must be >= 0 and --bandwidth > 0");
-    }
+    network_.check();
     nlohmann::json measured;
     if (!measured_.empty()) {
       std::ifstream in(measured_);
@@ -75,7 +71,7 @@ struct EmulateDemMpiCommand {
     for (const double w : dem::particle_work(particles, pairs)) work += w;
     const double per_work = step_s / work;
     dem::EngineSettings planning = engine.settings();
-    const dem::NetworkModel network{latency_s_, bandwidth_};
+    const dem::NetworkModel network{network_.latency_s, network_.bandwidth};
     const auto strong =
         dem::emulate_dem_mpi_strong(particles, pairs, planning, ranks, axis, per_work, network);
     const auto weak =
@@ -84,8 +80,8 @@ struct EmulateDemMpiCommand {
         "emulate dem-mpi '{}' (PREDICTED): {} particles, {} pairs; one process measured {:.4g} "
         "s a step over {} steps ({:.4g} s per unit of work); network {:.3g} s latency, {:.3g} "
         "B/s\n",
-        config.name, particles.size(), pairs.size(), step_s, steps_, per_work, latency_s_,
-        bandwidth_);
+        config.name, particles.size(), pairs.size(), step_s, steps_, per_work, network_.latency_s,
+        network_.bandwidth);
     fmt::print("{:>6} {:>12} {:>10} {:>12} {:>10} {:>9} {:>8} {:>12} {:>10}\n", "ranks",
                "strong step", "speed-up", "exchange s", "imbalance", "ghosts", "nbrs", "weak step",
                "weak eff.");
@@ -144,7 +140,9 @@ struct EmulateDemMpiCommand {
           {"calibration",
            {{"measured_step_s", step_s}, {"steps", steps_}, {"seconds_per_work", per_work}}},
           {"network",
-           {{"latency_s", latency_s_}, {"bandwidth", bandwidth_}, {"source", network_source_}}},
+           {{"latency_s", network_.latency_s},
+            {"bandwidth", network_.bandwidth},
+            {"source", network_.source}}},
           {"points", rows},
           {"checks", checks},
           {"method",
@@ -177,10 +175,7 @@ void add_emulate_dem_mpi_command(CLI::App& emulate_app, const std::string& comma
   app->add_option("--ranks", command->ranks_, "rank counts (1,2,4,...,1024)");
   app->add_option("--axis", command->axis_, "slab axis x, y or z (default: the longest)");
   app->add_option("--steps", command->steps_, "steps timed in one process (100)");
-  app->add_option("--latency", command->latency_s_, "network latency per message [s] (1.5e-6)");
-  app->add_option("--bandwidth", command->bandwidth_, "network bandwidth [bytes/s] (5e9)");
-  app->add_option("--network-source", command->network_source_,
-                  "where the network figures come from");
+  command->network_.add_to(*app);
   app->add_option("--measured", command->measured_,
                   "a scripts/dem-mpi-compare result file to check the prediction against");
   app->add_option("--json", command->json_out_, "write the document");
