@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <fstream>
@@ -205,19 +206,27 @@ TEST(DemMpiCli, AMissingConfigEndsEveryRankWithOneMessage) {
   EXPECT_EQ(count_of(run.output, "contactlab: error:"), 1) << run.output;
 }
 
+// The drop box holding one glass sphere (radius 0.5 mm) at `position`, moving at `vz` m/s
+// along z; written to `dir`.
+std::string drop_box_with_one_particle(const TempDir& dir, const std::array<double, 3>& position,
+                                       double vz) {
+  std::ifstream in(drop_box());
+  nlohmann::json config = nlohmann::json::parse(in);
+  config["particles"] = nlohmann::json::array({{{"position", position},
+                                                {"radius", 0.0005},
+                                                {"material", "glass"},
+                                                {"velocity", {0.0, 0.0, vz}}}});
+  const std::string path = dir.file("one-particle.json");
+  std::ofstream(path) << config.dump();
+  return path;
+}
+
 // One rank's particle becomes unstable in the first step (it moves 0.4 mm, more than skin/2):
 // every rank ends, no hang, and each rank that holds it (its owner, and a rank holding it as a
 // ghost sees the same drift) names it in the same line.
 TEST(DemMpiCli, AnUnstableParticleOnOneRankEndsEveryRankWithItsMessage) {
   TempDir dir;
-  std::ifstream in(drop_box());
-  nlohmann::json config = nlohmann::json::parse(in);
-  config["particles"] = nlohmann::json::array({{{"position", {0.014, 0.008, 0.05}},
-                                                {"radius", 0.0005},
-                                                {"material", "glass"},
-                                                {"velocity", {0.0, 0.0, -200.0}}}});
-  const std::string path = dir.file("unstable.json");
-  std::ofstream(path) << config.dump();
+  const std::string path = drop_box_with_one_particle(dir, {0.014, 0.008, 0.05}, -200.0);
   const auto start = std::chrono::steady_clock::now();
   const auto run = run_command(mpiexec(2) + contactlab_exe() + " dem run " + path +
                                " --mpi --axis x --threads 1 --steps 50");
@@ -237,14 +246,7 @@ TEST(DemMpiCli, AnUnstableParticleOnOneRankEndsEveryRankWithItsMessage) {
 // run ends at once rather than growing its grid with the particle's height.
 TEST(DemMpiCli, AParticleFlungOutOfTheDomainIsNamedOnce) {
   TempDir dir;
-  std::ifstream in(drop_box());
-  nlohmann::json config = nlohmann::json::parse(in);
-  config["particles"] = nlohmann::json::array({{{"position", {0.004, 0.008, 0.02}},
-                                                {"radius", 0.0005},
-                                                {"material", "glass"},
-                                                {"velocity", {0.0, 0.0, 40.0}}}});
-  const std::string path = dir.file("flung.json");
-  std::ofstream(path) << config.dump();
+  const std::string path = drop_box_with_one_particle(dir, {0.004, 0.008, 0.02}, 40.0);
   const std::string named = "particle 0 at (0.004, 0.008, 0.06";
   const auto one = run_command(contactlab_exe() + " dem run " + path + " --threads 1 --steps 2000");
   EXPECT_NE(one.exit_code, 0) << one.output;
