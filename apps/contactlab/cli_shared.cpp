@@ -62,6 +62,13 @@ std::pair<Scene, tuner::SceneRecord> SceneOptions::load() const {
   return {std::move(scene), std::move(record)};
 }
 
+void DemStateOptions::add_to(CLI::App& app) {
+  app.add_option("config", config, "DEM config")->required();
+  app.add_option("--restart", restart,
+                 "plan on this checkpoint of the config (default: its start)");
+  app.add_option("--axis", axis, "slab axis x, y or z (default: the longest)");
+}
+
 void NetworkOptions::add_to(CLI::App& app) {
   app.add_option("--latency", latency_s, "network latency per message [s] (1.5e-6)");
   app.add_option("--bandwidth", bandwidth, "network bandwidth [bytes/s] (5e9)");

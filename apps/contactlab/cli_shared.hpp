@@ -91,6 +91,17 @@ struct SceneOptions {
 };
 
 // "a,b,c" -> {"a", "b", "c"}; throws InputError on an empty item.
+// The run a decomposition is planned on (`dem partition`, `emulate dem-mpi`): the config, where
+// the run stands (a checkpoint of it; empty: the config's start) and the slabs' axis (empty: the
+// longest).
+struct DemStateOptions {
+  std::string config;
+  std::string restart;
+  std::string axis;
+
+  void add_to(CLI::App& app);
+};
+
 // The stated network of the MPI emulations (`emulate mpi`, `emulate dem-mpi`): latency per
 // message, bandwidth per link and where the figures come from (each command states its own
 // default source).

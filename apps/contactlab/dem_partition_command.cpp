@@ -9,6 +9,7 @@
 #include <string>
 
 #include "cli_shared.hpp"
+#include "contactlab/dem/checkpoint.hpp"
 #include "contactlab/dem/config.hpp"
 #include "contactlab/dem/slabs.hpp"
 #include "contactlab/kernels/atomic_file.hpp"
@@ -22,21 +23,26 @@ namespace dem = contactlab::dem;
 namespace tn = contactlab::tuner;
 
 struct DemPartitionCommand {
-  std::string config_;
+  DemStateOptions state_;
   int ranks_ = 0;
-  std::string axis_;
   int threads_ = 0;
   std::string json_out_;
   std::string command_line_;
 
   int run() const {
     if (ranks_ < 1) throw InputError("--ranks must be >= 1");
-    const int axis = axis_.empty() ? -1 : dem::parse_axis(axis_);
+    const int axis = state_.axis.empty() ? -1 : dem::parse_axis(state_.axis);
     if (!json_out_.empty()) prepare_output_file(json_out_);
-    const dem::DemConfig config = dem::read_dem_config(config_);
+    const dem::DemConfig config = dem::read_dem_config(state_.config);
     dem::EngineSettings settings = config.settings;
     settings.threads = resolve_threads(threads_);
-    const dem::Particles particles = dem::make_particles(config);
+    // The particles where the run stands: the config's start, or a checkpoint's (a filled
+    // hopper decomposes otherwise than its lattice).
+    dem::Particles particles = dem::make_particles(config);
+    if (!state_.restart.empty()) {
+      particles.set_wall_count(settings.walls.size());
+      particles = dem::read_checkpoint_parts(state_.restart, particles).particles;
+    }
     const dem::SlabPlan plan = dem::plan_slabs(particles, settings, ranks_, axis);
     const dem::Slabs& slabs = plan.slabs;
     const dem::SlabLoad& load = plan.load;
@@ -78,6 +84,7 @@ struct DemPartitionCommand {
           {"kind", "contactlab-dem-partition"},
           {"context", tn::collect_context(command_line_, settings.threads)},
           {"config", config.name},
+          {"restart", state_.restart},
           {"particles", particles.size()},
           {"ranks", ranks_},
           {"axis", dem::axis_name(slabs.axis)},
@@ -88,7 +95,8 @@ struct DemPartitionCommand {
           {"imbalance", load.imbalance},
           {"per_rank", rows},
           {"method",
-           "Computed, not measured: the neighbour list of the config's start in one process; "
+           "Computed, not measured: the neighbour list of the config's start (or of --restart's "
+           "particles) in one process; "
            "each particle weighs 1 + half its pairs; slabs along the axis cut where the running "
            "work crosses r W / R (halfway between two particles); ghosts are the particles "
            "within the halo width of another rank's slab (across the periodic boundary too). "
@@ -106,9 +114,8 @@ Subcommand add_dem_partition_command(CLI::App& dem_app, const std::string& comma
   partition->command_line_ = command_line;
   CLI::App* app = dem_app.add_subcommand(
       "partition", "the slabs, particles, ghosts and work per rank of dem run --mpi on R ranks");
-  app->add_option("config", partition->config_, "DEM config")->required();
+  partition->state_.add_to(*app);
   app->add_option("--ranks", partition->ranks_, "processes")->required();
-  app->add_option("--axis", partition->axis_, "slab axis x, y or z (default: the longest)");
   app->add_option("--threads", partition->threads_, "threads of the neighbour list");
   app->add_option("--json", partition->json_out_, "write the partition as JSON");
   return {app, [partition] { return partition->run(); }};

@@ -27,10 +27,8 @@ namespace dem = contactlab::dem;
 namespace tn = contactlab::tuner;
 
 struct EmulateDemMpiCommand {
-  std::string config_;
-  std::string restart_;
+  DemStateOptions state_;
   std::string ranks_ = "1,2,4,8,16,32,64,128,256,512,1024";
-  std::string axis_;
   std::uint64_t steps_ = 100;
   NetworkOptions network_{.source =
                               "an InfiniBand-class network as commonly cited (about 1.5 us MPI "
@@ -41,7 +39,7 @@ struct EmulateDemMpiCommand {
 
   int run() const {
     const std::vector<int> ranks = int_list(ranks_, "--ranks");
-    const int axis = axis_.empty() ? -1 : dem::parse_axis(axis_);
+    const int axis = state_.axis.empty() ? -1 : dem::parse_axis(state_.axis);
     if (steps_ == 0) throw InputError("--steps must be >= 1");
     network_.check();
     nlohmann::json measured;
@@ -54,13 +52,13 @@ struct EmulateDemMpiCommand {
       }
     }
     if (!json_out_.empty()) prepare_output_file(json_out_);
-    const dem::DemConfig config = dem::read_dem_config(config_);
+    const dem::DemConfig config = dem::read_dem_config(state_.config);
     dem::EngineSettings settings = config.settings;
     settings.threads = 1;
     settings.warn_large_overlaps = false;
     // The cost of a unit of work here: one process, one thread, from the run's start.
     dem::Engine engine(settings, dem::make_particles(config));
-    if (!restart_.empty()) dem::read_checkpoint(engine, restart_);
+    if (!state_.restart.empty()) dem::read_checkpoint(engine, state_.restart);
     engine.run_steps(10);  // untimed
     const double t0 = omp_get_wtime();
     engine.run_steps(steps_);
@@ -134,7 +132,7 @@ struct EmulateDemMpiCommand {
           {"predicted", true},
           {"context", tn::collect_context(command_line_, 1)},
           {"config", config.name},
-          {"restart", restart_},
+          {"restart", state_.restart},
           {"particles", particles.size()},
           {"pairs", pairs.size()},
           {"calibration",
@@ -170,10 +168,8 @@ void add_emulate_dem_mpi_command(CLI::App& emulate_app, const std::string& comma
   CLI::App* app = emulate_app.add_subcommand(
       "dem-mpi",
       "dem run --mpi over 1..1024 ranks, strong and weak: slabs' work and a network model");
-  app->add_option("config", command->config_, "DEM config")->required();
-  app->add_option("--restart", command->restart_, "start from this checkpoint of the config");
+  command->state_.add_to(*app);
   app->add_option("--ranks", command->ranks_, "rank counts (1,2,4,...,1024)");
-  app->add_option("--axis", command->axis_, "slab axis x, y or z (default: the longest)");
   app->add_option("--steps", command->steps_, "steps timed in one process (100)");
   command->network_.add_to(*app);
   app->add_option("--measured", command->measured_,

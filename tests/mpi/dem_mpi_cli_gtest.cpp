@@ -282,6 +282,33 @@ TEST(DemPartitionCli, TheSlabsHoldEveryParticleOnce) {
   EXPECT_NE(bad.output.find("--ranks must be >= 1"), std::string::npos) << bad.output;
 }
 
+// Planned where the run stands: the drop box's particles have fallen to the floor after 1000
+// steps, so slabs along z cut otherwise than at the lattice; a file that is no checkpoint is one
+// line.
+TEST(DemPartitionCli, PlansOnACheckpointWhereTheRunStands) {
+  TempDir dir;
+  const auto fallen = run_command(contactlab_exe() + " dem run " + drop_box() +
+                                  " --steps 1000 --checkpoint " + dir.file("fallen.chk"));
+  ASSERT_EQ(fallen.exit_code, 0) << fallen.output;
+  const auto start = run_command(contactlab_exe() + " dem partition " + drop_box() +
+                                 " --ranks 2 --axis z --json " + dir.file("start.json"));
+  const auto now = run_command(contactlab_exe() + " dem partition " + drop_box() +
+                               " --ranks 2 --axis z --restart " + dir.file("fallen.chk") +
+                               " --json " + dir.file("now.json"));
+  ASSERT_EQ(start.exit_code, 0) << start.output;
+  ASSERT_EQ(now.exit_code, 0) << now.output;
+  const nlohmann::json a = read_json(dir.file("start.json")), b = read_json(dir.file("now.json"));
+  EXPECT_EQ(b["restart"], dir.file("fallen.chk"));
+  EXPECT_EQ(a["particles"], b["particles"]);
+  EXPECT_LT(b["per_rank"][0]["slab_hi_m"].get<double>(),
+            a["per_rank"][0]["slab_hi_m"].get<double>());
+  const auto bad = run_command(contactlab_exe() + " dem partition " + drop_box() +
+                               " --ranks 2 --restart " + drop_box());
+  EXPECT_EQ(bad.exit_code, 2) << bad.output;
+  EXPECT_NE(bad.output.find("not a contactlab DEM checkpoint"), std::string::npos) << bad.output;
+  EXPECT_EQ(count_of(bad.output, "\n"), 1) << bad.output;
+}
+
 TEST(DemMpiEmulationCli, PredictsEveryRankCountAndSaysSo) {
   TempDir dir;
   const auto run = run_command(contactlab_exe() + " emulate dem-mpi " + drop_box() +
