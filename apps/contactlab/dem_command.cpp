@@ -79,6 +79,9 @@ struct DemRunCommand {
     request.json_out = json_out_;
     request.outputs = output_options();
     request.restart = restart_;
+    request.resume = resume_;
+    request.resume_every_s = resume_every_s_;
+    request.progress_every_s = progress_every_s_;
     request.command_line = command_line_;
     request.check_options = [this] {
       const std::pair<bool, const char*> unsupported[] = {{variant_ == "auto", "--variant auto"},
@@ -90,10 +93,6 @@ struct DemRunCommand {
                            " is not available with --mpi (the force model is calibrated in one "
                            "process): give --variant a name");
         }
-      }
-      if (!resume_.empty() || progress_every_s_ > 0) {
-        throw InputError(std::string(!resume_.empty() ? "--resume" : "--progress") +
-                         " is not available with --mpi yet: use --checkpoint and --restart");
       }
       check_stopping_and_resuming();
     };
@@ -201,11 +200,16 @@ struct DemRunCommand {
     // checkpoint taken between outputs writes its frames where an unbroken run would have.
     const std::uint64_t cadence_origin = resume_.empty() ? first_step : 0;
     const bool ends_at_config_end = steps_ == 0 && !until_time_;
+    auto standing = [&] {
+      return RunWatch::Standing{engine.step_count(), engine.time_s(),
+                                static_cast<double>(engine.particle_steps()),
+                                has_sink ? engine.removed_mass() / start_mass : -1.0};
+    };
     RunWatch watch({.progress_every_s = progress_every_s_,
                     .terminal = ::isatty(STDERR_FILENO) != 0,
                     .checkpoint_every_s = resume_.empty() ? 0.0 : resume_every_s_,
                     .stop_on_signal = !resume_.empty()},
-                   engine, total_steps);
+                   standing(), total_steps);
     auto write_checkpoint = [&] {
       if (checkpoint.empty()) return;
       dem::write_checkpoint(engine, outputs.frames(), checkpoint);
@@ -222,7 +226,7 @@ struct DemRunCommand {
         engine.run_steps(watch.batch_steps(std::min(to_output, total_steps - engine.step_count())),
                          end);
         if (tuning && retune_) tuning->after_steps(engine);
-        watch.after_batch(engine, has_sink ? engine.removed_mass() / start_mass : -1.0);
+        watch.after_batch(standing());
         const bool empty = engine.particles().size() == 0;
         // A stop short of the config's end writes a frame there, except under --resume, whose
         // series must stay the unbroken run's: its checkpoint holds the stop instead.

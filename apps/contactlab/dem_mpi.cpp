@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <limits>
 #include <memory>
 #include <nlohmann/json.hpp>
@@ -88,16 +89,23 @@ int run_dem_mpi(const DemMpiRequest& request) {
       if (rank != 0) return;
       all = dem::make_particles(config);
       outputs = std::make_unique<RunOutputs>(request.outputs, config, *all);
-      if (request.restart.empty()) return;
+      // --resume: rank 0 alone looks for the file (the others never read it).
+      const bool resuming = !request.resume.empty() && std::filesystem::exists(request.resume);
+      const std::string& restart = resuming ? request.resume : request.restart;
+      if (restart.empty()) return;
       // A checkpoint of any run: its particles and list weigh the slabs, its springs are
       // carried into each rank's first list, its counters go on (rank 0 holds the sums).
       all->set_wall_count(settings.walls.size());
-      dem::CheckpointParts parts = dem::read_checkpoint_parts(request.restart, *all);
+      dem::CheckpointParts parts = dem::read_checkpoint_parts(restart, *all);
       all = std::move(parts.particles);
       all_pairs = std::move(parts.pairs);
       resume = parts.state;
       frames = parts.frames;
       outputs->continue_series(resume->time_s, frames);
+      if (resuming) {
+        fmt::print("resuming from {}: step {}, t = {:.6g} s\n", request.resume, resume->step,
+                   resume->time_s);
+      }
     });
     // The checkpoint's time and counters on every rank (the sums on rank 0 only).
     int resuming = resume ? 1 : 0;
@@ -165,34 +173,82 @@ int run_dem_mpi(const DemMpiRequest& request) {
         !asked.vtk_dir.empty() || !asked.png_dir.empty() || !asked.discharge.empty();
     const bool checkpoints = !asked.checkpoint.empty() || !asked.vtk_dir.empty();
     double output_s = 0.0;
-    auto output = [&](bool with_checkpoint) {
-      if (!frames_or_rows && !(with_checkpoint && checkpoints)) return;
+    // The frame and rows (with_frame) and the checkpoint (with_checkpoint) of the gathered run.
+    auto output = [&](bool with_checkpoint, bool with_frame = true) {
+      with_frame = with_frame && frames_or_rows;
+      with_checkpoint = with_checkpoint && checkpoints;
+      if (!with_frame && !with_checkpoint) return;
       const double began = omp_get_wtime();
       dem::mpi::GatheredRun run = dem::mpi::gather_run(comm, *engine, halo);
-      mpi::run_checked(comm, [&] {
-        if (outputs) outputs->write(run.snapshot(settings));
-      });
-      if (with_checkpoint && checkpoints) {
+      if (with_frame) {
+        mpi::run_checked(comm, [&] {
+          if (outputs) outputs->write(run.snapshot(settings));
+        });
+      }
+      if (with_checkpoint) {
         const int written = outputs ? outputs->frames() : 0;  // rank 0's count is the one written
         dem::mpi::write_checkpoint(comm, *engine, halo, std::move(run), written,
                                    outputs ? outputs->checkpoint() : std::string());
       }
       output_s += omp_get_wtime() - began;
     };
+    // --resume and --progress as in one process; rank 0's clock and batch length rule, and a
+    // signal on any rank stops every rank after the same batch.
+    const bool resumable = !request.resume.empty();
+    const bool watched = resumable || request.progress_every_s > 0;
+    const std::uint64_t cadence_origin = resumable ? 0 : first_step;
+    const bool ends_at_config_end = request.steps == 0 && !request.until_time_s;
+    const bool has_sink = settings.sink_below_z > -std::numeric_limits<double>::infinity();
+    auto standing = [&] {  // collective when watched
+      return RunWatch::Standing{
+          engine->step_count(), engine->time_s(),
+          halo.sum_over_ranks(static_cast<double>(engine->particle_steps())),
+          has_sink ? halo.sum_over_ranks(engine->removed_mass()) / start_mass : -1.0};
+    };
+    RunWatch watch({.progress_every_s = rank == 0 ? request.progress_every_s : 0.0,
+                    .terminal = false,
+                    .checkpoint_every_s = resumable ? request.resume_every_s : 0.0,
+                    .stop_on_signal = resumable},
+                   watched ? standing() : RunWatch::Standing{}, total_steps);
     MPI_Barrier(comm);
     const double t0 = omp_get_wtime();
     double discharged = 0.0;
     try {
       if (engine->step_count() == 0) output(false);
       while (engine->step_count() < total_steps) {
-        const std::uint64_t to_output = every - (engine->step_count() - first_step) % every;
-        engine->run_steps(std::min(to_output, total_steps - engine->step_count()), end);
+        const std::uint64_t to_output = every - (engine->step_count() - cadence_origin) % every;
+        std::uint64_t batch =
+            watch.batch_steps(std::min(to_output, total_steps - engine->step_count()));
+        if (watched) MPI_Bcast(&batch, 1, MPI_UINT64_T, 0, comm);
+        engine->run_steps(batch, end);
+        // {a signal's number, rank 0's checkpoint clock}, agreed over the ranks.
+        int requested[2] = {0, 0};
+        if (watched) {
+          watch.after_batch(standing());
+          requested[0] = watch.stop_signal();
+          requested[1] = rank == 0 && watch.checkpoint_due() ? 1 : 0;
+          MPI_Allreduce(MPI_IN_PLACE, requested, 2, MPI_INT, MPI_MAX, comm);
+        }
         const bool empty = engine->run_particles() == 0;
         if (stop_mass > 0) discharged = halo.sum_over_ranks(engine->removed_mass());
         const bool stop = stop_mass > 0 && discharged >= stop_mass;
-        if ((engine->step_count() - first_step) % every == 0 ||
-            engine->step_count() == total_steps || empty || stop) {
+        const bool last = engine->step_count() == total_steps;
+        if ((engine->step_count() - cadence_origin) % every == 0 || empty || stop ||
+            (last && (!resumable || ends_at_config_end))) {
           output(true);
+          watch.checkpoint_written();
+        } else if (requested[0] != 0 || requested[1] != 0 || (last && resumable)) {
+          output(true, false);
+          watch.checkpoint_written();
+        }
+        if (requested[0] != 0) {
+          if (rank == 0) {
+            fmt::print(stderr,
+                       "contactlab: stopped by signal {} at step {} (t = {:.6g} s): {} holds the "
+                       "run; the same command continues it\n",
+                       requested[0], engine->step_count(), engine->time_s(), outputs->checkpoint());
+          }
+          return 128 + requested[0];
         }
         if (empty && rank == 0) {
           fmt::print("every particle has left through the sink by t = {:.6g} s: stopping\n",
@@ -213,6 +269,7 @@ int run_dem_mpi(const DemMpiRequest& request) {
       mpi::abort_all(comm, e.what(), 4);
     }
     const double wall = omp_get_wtime() - t0;
+    watch.finish(wall, engine->step_count() == total_steps);
     if (rank == 0 && checkpoints) fmt::print("wrote {}\n", outputs->checkpoint());
     discharged = halo.sum_over_ranks(engine->removed_mass());
     const double particle_steps =

@@ -25,6 +25,11 @@ struct DemMpiRequest {
   // gathered at every output step: the files one process would have written.
   DemOutputOptions outputs;
   std::string restart;  // a checkpoint of the config, from any run (one process or any ranks)
+  // --resume: continue from this file when it exists (rank 0 looks), else start; it is the
+  // checkpoint (outputs.checkpoint), written at outputs, every resume_every_s and on a signal.
+  std::string resume;
+  double resume_every_s = 600.0;
+  double progress_every_s = 0.0;  // rank 0's progress lines on stderr (0: none)
   std::string command_line;
   std::function<void()> check_options;  // run on every rank; throws InputError
 };

@@ -25,15 +25,14 @@ std::uint64_t last_step_of_run(std::uint64_t step_now, double time_now_s, double
          static_cast<std::uint64_t>(std::llround(std::max(0.0, end - time_now_s) / dt_s));
 }
 
-RunWatch::RunWatch(const RunWatchOptions& options, const dem::Engine& engine,
-                   std::uint64_t last_step)
+RunWatch::RunWatch(const RunWatchOptions& options, const Standing& first, std::uint64_t last_step)
     : options_(options),
       watching_(options.progress_every_s > 0.0 || options.terminal ||
                 options.checkpoint_every_s > 0.0 || options.stop_on_signal),
-      first_step_(engine.step_count()),
+      first_step_(first.step),
       last_step_(last_step),
       last_batch_end_step_(first_step_),
-      first_particle_steps_(engine.particle_steps()),
+      first_particle_steps_(first.particle_steps),
       start_s_(omp_get_wtime()),
       last_batch_end_s_(start_s_),
       last_checkpoint_s_(start_s_) {
@@ -62,9 +61,9 @@ std::uint64_t RunWatch::batch_steps(std::uint64_t wanted) const {
   return std::min(wanted, about_a_second);
 }
 
-void RunWatch::after_batch(const dem::Engine& engine, double discharged) {
+void RunWatch::after_batch(const Standing& standing) {
   const double now = omp_get_wtime();
-  const std::uint64_t step = engine.step_count();
+  const std::uint64_t step = standing.step;
   if (now > last_batch_end_s_ && step > last_batch_end_step_) {
     steps_per_s_ = static_cast<double>(step - last_batch_end_step_) / (now - last_batch_end_s_);
   }
@@ -74,15 +73,16 @@ void RunWatch::after_batch(const dem::Engine& engine, double discharged) {
   const double wall = now - start_s_;
   const double span = static_cast<double>(std::max<std::uint64_t>(1, last_step_ - first_step_));
   const double done = static_cast<double>(step - first_step_) / span;
-  const double rate =
-      static_cast<double>(engine.particle_steps() - first_particle_steps_) / std::max(wall, 1e-9);
+  const double rate = (standing.particle_steps - first_particle_steps_) / std::max(wall, 1e-9);
   // The time left at the run's own rate so far (its contacts change as it goes; the rate over
   // the whole run is steadier than the last batch's).
   const double steps_rate = static_cast<double>(step - first_step_) / std::max(wall, 1e-9);
   const double left = step > first_step_ ? static_cast<double>(last_step_ - step) / steps_rate : -1;
   std::string detail = fmt::format("step {}, t = {:.6g} s, {:.3g} M particle-steps/s", step,
-                                   engine.time_s(), rate / 1e6);
-  if (discharged >= 0.0) detail += fmt::format(", {:.1f} % discharged", 100.0 * discharged);
+                                   standing.time_s, rate / 1e6);
+  if (standing.discharged >= 0.0) {
+    detail += fmt::format(", {:.1f} % discharged", 100.0 * standing.discharged);
+  }
   bar_->update(done, left, detail);
 }
 

@@ -31,7 +31,15 @@ struct RunWatchOptions {
 
 class RunWatch {
  public:
-  RunWatch(const RunWatchOptions& options, const dem::Engine& engine, std::uint64_t last_step);
+  // Where the run stands after a batch: over every rank for a decomposed run.
+  struct Standing {
+    std::uint64_t step = 0;
+    double time_s = 0.0;
+    double particle_steps = 0.0;  // since the engine was made (its particle_steps())
+    double discharged = -1.0;     // the share of the mass the sink has taken; < 0: no sink
+  };
+  // `first` is where the run starts (its particle steps those of every rank, as after_batch's).
+  RunWatch(const RunWatchOptions& options, const Standing& first, std::uint64_t last_step);
   ~RunWatch();
   RunWatch(const RunWatch&) = delete;
   RunWatch& operator=(const RunWatch&) = delete;
@@ -39,9 +47,8 @@ class RunWatch {
   // The most steps the next batch may take: about a second of the run's own rate when anything
   // watches (the first batch 8 steps), else no bound.
   std::uint64_t batch_steps(std::uint64_t wanted) const;
-  // After each batch: the progress line (discharged: the share of the mass the sink has taken,
-  // negative without a sink).
-  void after_batch(const dem::Engine& engine, double discharged);
+  // After each batch: the progress line.
+  void after_batch(const Standing& now);
   // True once `checkpoint_every_s` has passed since the last checkpoint; the caller writes one
   // and calls checkpoint_written().
   bool checkpoint_due() const;
@@ -56,7 +63,7 @@ class RunWatch {
   bool watching_;
   std::optional<tuner::ProgressBar> bar_;
   std::uint64_t first_step_, last_step_, last_batch_end_step_;
-  std::uint64_t first_particle_steps_;
+  double first_particle_steps_;
   double start_s_, last_batch_end_s_, last_checkpoint_s_;
   double steps_per_s_ = 0.0;  // the last batch's rate
   using Handler = void (*)(int);

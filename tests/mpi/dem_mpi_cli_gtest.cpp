@@ -10,6 +10,7 @@
 #include <array>
 #include <chrono>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <sstream>
@@ -22,6 +23,8 @@
 
 namespace contactlab::test {
 namespace {
+
+namespace fs = std::filesystem;
 
 std::string drop_box() {
   return std::string(CONTACTLAB_SOURCE_DIR) + "/experiments/dem/drop-box.json";
@@ -87,7 +90,7 @@ TEST(DemMpiCli, ACheckpointOfOneProcessRestartsOnThreeRanks) {
 TEST(DemMpiCli, WhatMpiDoesNotSupportIsOneMessageOnEveryRankCount) {
   const std::pair<std::string, std::string> cases[] = {
       {"--variant auto", "--variant auto is not available with --mpi"},
-      {"--resume " + ::testing::TempDir() + "never.chk", "--resume is not available with --mpi"}};
+      {"--retune", "--retune is not available with --mpi"}};
   for (const auto& [flags, message] : cases) {
     const auto start = std::chrono::steady_clock::now();
     const auto run = run_command(mpiexec(2) + contactlab_exe() + " dem run " + drop_box() +
@@ -177,6 +180,44 @@ TEST(DemMpiCli, OutputsOfThreeRanksAreThoseOfOneProcess) {
   EXPECT_EQ(count_of(slurp(dir.file("three") + "/tiny.pvd"), "<DataSet"), 8);
   EXPECT_EQ(slurp(dir.file("one") + "/tiny_00003.vtp"),
             slurp(dir.file("three") + "/tiny_00003.vtp"));
+}
+
+// --resume under MPI: three ranks stop between two outputs (--until-time), two ranks run the same
+// command on and finish the series: the frames before the stop are one process's bytes, the
+// series' times (the checkpoint keeps the time base) and its length are one process's, the
+// energies within rounding (the restart rebuilds the list in another order). --progress: rank
+// 0's lines only.
+TEST(DemMpiCli, ResumeStopsBetweenOutputsAndGoesOnOnOtherRankCounts) {
+  TempDir dir;
+  std::string text = slurp(tiny_hopper_with_sink(dir, "0.0005"));
+  const std::string end = "\"end\": 0.004";
+  text.replace(text.find(end), end.size(), "\"end\": 0.006");
+  const std::string config = dir.file("hopper.json");
+  std::ofstream(config) << text;
+  const auto one = run_command(contactlab_exe() + " dem run " + config + " --threads 1 --vtk " +
+                               dir.file("one"));
+  ASSERT_EQ(one.exit_code, 0) << one.output;
+  const std::string command = contactlab_exe() + " dem run " + config +
+                              " --mpi --threads 1 --vtk " + dir.file("many") + " --resume " +
+                              dir.file("fill.chk") + " --progress 1e-9";
+  const auto first = run_command(mpiexec(3) + command + " --until-time 0.0025");
+  ASSERT_EQ(first.exit_code, 0) << first.output;
+  EXPECT_FALSE(fs::exists(dir.file("many") + "/tiny_00003.vtp"));
+  EXPECT_EQ(count_of(first.output, "contactlab: dem run: 100 %, done in"), 1) << first.output;
+  const auto second = run_command(mpiexec(2) + command);
+  ASSERT_EQ(second.exit_code, 0) << second.output;
+  EXPECT_NE(second.output.find("resuming from " + dir.file("fill.chk") + ": step 1250"),
+            std::string::npos)
+      << second.output;
+  for (int f = 0; f <= 2; ++f) {
+    const std::string frame = fmt::format("/tiny_{:05d}.vtp", f);
+    EXPECT_EQ(slurp(dir.file("one") + frame), slurp(dir.file("many") + frame)) << frame;
+  }
+  EXPECT_TRUE(fs::exists(dir.file("many") + "/tiny_00006.vtp"));
+  EXPECT_FALSE(fs::exists(dir.file("many") + "/tiny_00007.vtp"));
+  EXPECT_EQ(slurp(dir.file("one") + "/tiny.pvd"), slurp(dir.file("many") + "/tiny.pvd"));
+  expect_csv_near(dir.file("one") + "/tiny_energy.csv", dir.file("many") + "/tiny_energy.csv",
+                  {2, 3, 4}, 1e-6);
 }
 
 // A force variant by name runs on every rank: the full list gives the default's trajectories
