@@ -139,17 +139,23 @@ void expect_csv_near(const std::string& a, const std::string& b, const std::vect
   }
 }
 
+// The tiny hopper with its sink at the gate, run for 6 ms (seven frames), written to `dir`.
+std::string tiny_hopper_draining_for_6_ms(const TempDir& dir) {
+  std::string text = slurp(tiny_hopper_with_sink(dir, "0.0005"));
+  const std::string end = "\"end\": 0.004";
+  text.replace(text.find(end), end.size(), "\"end\": 0.006");
+  const std::string config = dir.file("hopper.json");
+  std::ofstream(config) << text;
+  return config;
+}
+
 // The first command on a hopper whose sink takes particles: three ranks write the frames
 // one process writes, to the byte (the same trajectories, gathered in stable-id order); the
 // discharge and energy series agree to the last bits of their sums over the ranks; the
 // checkpoint in the folder restarts the series on two ranks.
 TEST(DemMpiCli, OutputsOfThreeRanksAreThoseOfOneProcess) {
   TempDir dir;
-  std::string text = slurp(tiny_hopper_with_sink(dir, "0.0005"));  // the sink at the gate
-  const std::string end = "\"end\": 0.004";
-  text.replace(text.find(end), end.size(), "\"end\": 0.006");
-  const std::string config = dir.file("hopper.json");
-  std::ofstream(config) << text;
+  const std::string config = tiny_hopper_draining_for_6_ms(dir);
   const auto one = run_command(contactlab_exe() + " dem run " + config + " --threads 1 --vtk " +
                                dir.file("one"));
   ASSERT_EQ(one.exit_code, 0) << one.output;
@@ -189,11 +195,7 @@ TEST(DemMpiCli, OutputsOfThreeRanksAreThoseOfOneProcess) {
 // 0's lines only.
 TEST(DemMpiCli, ResumeStopsBetweenOutputsAndGoesOnOnOtherRankCounts) {
   TempDir dir;
-  std::string text = slurp(tiny_hopper_with_sink(dir, "0.0005"));
-  const std::string end = "\"end\": 0.004";
-  text.replace(text.find(end), end.size(), "\"end\": 0.006");
-  const std::string config = dir.file("hopper.json");
-  std::ofstream(config) << text;
+  const std::string config = tiny_hopper_draining_for_6_ms(dir);
   const auto one = run_command(contactlab_exe() + " dem run " + config + " --threads 1 --vtk " +
                                dir.file("one"));
   ASSERT_EQ(one.exit_code, 0) << one.output;
