@@ -48,7 +48,7 @@ class RunWatch {
   // watches (the first batch 8 steps), else no bound.
   std::uint64_t batch_steps(std::uint64_t wanted) const;
   // After each batch: the progress line.
-  void after_batch(const Standing& now);
+  void after_batch(const Standing& standing);
   // True once `checkpoint_every_s` has passed since the last checkpoint; the caller writes one
   // and calls checkpoint_written().
   bool checkpoint_due() const;

@@ -26,7 +26,7 @@ std::string drop_box_ending_at(const TempDir& dir, const std::string& end) {
   const auto at = text.find(key);
   EXPECT_NE(at, std::string::npos);
   text.replace(at, key.size(), "\"end\": " + end);
-  const std::string path = dir.file("drop.json");
+  std::string path = dir.file("drop.json");
   std::ofstream(path) << text;
   return path;
 }

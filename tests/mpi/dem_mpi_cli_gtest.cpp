@@ -144,7 +144,7 @@ std::string tiny_hopper_draining_for_6_ms(const TempDir& dir) {
   std::string text = slurp(tiny_hopper_with_sink(dir, "0.0005"));
   const std::string end = "\"end\": 0.004";
   text.replace(text.find(end), end.size(), "\"end\": 0.006");
-  const std::string config = dir.file("hopper.json");
+  std::string config = dir.file("hopper.json");
   std::ofstream(config) << text;
   return config;
 }
@@ -259,7 +259,7 @@ std::string drop_box_with_one_particle(const TempDir& dir, const std::array<doub
                                                 {"radius", 0.0005},
                                                 {"material", "glass"},
                                                 {"velocity", {0.0, 0.0, vz}}}});
-  const std::string path = dir.file("one-particle.json");
+  std::string path = dir.file("one-particle.json");
   std::ofstream(path) << config.dump();
   return path;
 }
