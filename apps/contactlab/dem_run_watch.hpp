@@ -7,6 +7,7 @@
 
 #include <csignal>
 #include <cstdint>
+#include <deque>
 #include <optional>
 #include <string>
 
@@ -66,6 +67,14 @@ class RunWatch {
   double first_particle_steps_;
   double start_s_, last_batch_end_s_, last_checkpoint_s_;
   double steps_per_s_ = 0.0;  // the last batch's rate
+  // (wall s, step, particle steps) after recent batches: the rate and the time left are taken
+  // over the last fifth of the run (at least 30 s), since a filling silo slows as it lands.
+  struct Sample {
+    double wall_s;
+    std::uint64_t step;
+    double particle_steps;
+  };
+  std::deque<Sample> recent_;
   using Handler = void (*)(int);
   Handler previous_int_ = SIG_DFL, previous_term_ = SIG_DFL;
 };
