@@ -174,11 +174,6 @@ struct DemRunCommand {
     // Steps from where the (restarted) run stands (a restart may change dt).
     const std::uint64_t total_steps = last_step_of_run(engine.step_count(), engine.time_s(), dt,
                                                        steps_, until_time_, config.end_time_s);
-    const std::uint64_t every =
-        config.output_every_s > 0
-            ? std::max<std::uint64_t>(
-                  1, static_cast<std::uint64_t>(std::llround(config.output_every_s / dt)))
-            : std::max<std::uint64_t>(1, total_steps);
     fmt::print(
         "dem run '{}': {} particles, {} walls, dt = {:.6g} s (stable limit {:.6g} s), "
         "steps {} -> {}, {} threads{}\n",
@@ -196,10 +191,8 @@ struct DemRunCommand {
     const double t0 = omp_get_wtime();
     const std::uint64_t first_step = engine.step_count();
     const std::uint64_t first_particle_steps = engine.particle_steps();
-    // With --resume the outputs keep the config's cadence from step 0, so a run resumed from a
-    // checkpoint taken between outputs writes its frames where an unbroken run would have.
-    const std::uint64_t cadence_origin = resume_.empty() ? first_step : 0;
-    const bool ends_at_config_end = steps_ == 0 && !until_time_;
+    const OutputCadence cadence(config.output_every_s, dt, first_step, total_steps,
+                                !resume_.empty(), steps_ == 0 && !until_time_);
     auto standing = [&] {
       return RunWatch::Standing{engine.step_count(), engine.time_s(),
                                 static_cast<double>(engine.particle_steps()),
@@ -222,28 +215,21 @@ struct DemRunCommand {
                                                           : dem::Engine::BatchEnd::kAfterSteps;
     try {
       while (engine.step_count() < total_steps) {
-        const std::uint64_t to_output = every - (engine.step_count() - cadence_origin) % every;
+        const std::uint64_t to_output = cadence.steps_to_next(engine.step_count());
         engine.run_steps(watch.batch_steps(std::min(to_output, total_steps - engine.step_count())),
                          end);
         if (tuning && retune_) tuning->after_steps(engine);
         watch.after_batch(standing());
         const bool empty = engine.particles().size() == 0;
-        // A stop short of the config's end writes a frame there, except under --resume, whose
-        // series must stay the unbroken run's: its checkpoint holds the stop instead.
-        const bool stop = engine.step_count() == total_steps;
-        if ((engine.step_count() - cadence_origin) % every == 0 || empty ||
-            (stop && (resume_.empty() || ends_at_config_end))) {
+        if (cadence.frame_at(engine.step_count(), empty)) {
           output();
           write_checkpoint();
-        } else if (watch.checkpoint_due() || (stop && !resume_.empty())) {
+        } else if (watch.checkpoint_due() || cadence.checkpoint_only_at(engine.step_count())) {
           write_checkpoint();
         }
         if (const int signal = watch.stop_signal()) {
           write_checkpoint();
-          fmt::print(stderr,
-                     "contactlab: stopped by signal {} at step {} (t = {:.6g} s): {} holds the "
-                     "run; the same command continues it\n",
-                     signal, engine.step_count(), engine.time_s(), checkpoint);
+          print_stopped_by_signal(signal, engine.step_count(), engine.time_s(), checkpoint);
           return 128 + signal;
         }
         if (empty) {

@@ -163,11 +163,6 @@ int run_dem_mpi(const DemMpiRequest& request) {
     const auto end =
         stop_mass > 0 ? dem::Engine::BatchEnd::kAtRebuild : dem::Engine::BatchEnd::kAfterSteps;
     const std::uint64_t first_step = engine->step_count();
-    const std::uint64_t every =
-        config.output_every_s > 0
-            ? std::max<std::uint64_t>(1, static_cast<std::uint64_t>(
-                                             std::llround(config.output_every_s / settings.dt_s)))
-            : std::max<std::uint64_t>(1, total_steps - first_step);
     const DemOutputOptions& asked = request.outputs;
     const bool frames_or_rows =
         !asked.vtk_dir.empty() || !asked.png_dir.empty() || !asked.discharge.empty();
@@ -196,8 +191,8 @@ int run_dem_mpi(const DemMpiRequest& request) {
     // signal on any rank stops every rank after the same batch.
     const bool resumable = !request.resume.empty();
     const bool watched = resumable || request.progress_every_s > 0;
-    const std::uint64_t cadence_origin = resumable ? 0 : first_step;
-    const bool ends_at_config_end = request.steps == 0 && !request.until_time_s;
+    const OutputCadence cadence(config.output_every_s, settings.dt_s, first_step, total_steps,
+                                resumable, request.steps == 0 && !request.until_time_s);
     const bool has_sink = settings.sink_below_z > -std::numeric_limits<double>::infinity();
     auto standing = [&] {  // collective when watched
       return RunWatch::Standing{
@@ -216,7 +211,7 @@ int run_dem_mpi(const DemMpiRequest& request) {
     try {
       if (engine->step_count() == 0) output(false);
       while (engine->step_count() < total_steps) {
-        const std::uint64_t to_output = every - (engine->step_count() - cadence_origin) % every;
+        const std::uint64_t to_output = cadence.steps_to_next(engine->step_count());
         std::uint64_t batch =
             watch.batch_steps(std::min(to_output, total_steps - engine->step_count()));
         if (watched) MPI_Bcast(&batch, 1, MPI_UINT64_T, 0, comm);
@@ -232,21 +227,18 @@ int run_dem_mpi(const DemMpiRequest& request) {
         const bool empty = engine->run_particles() == 0;
         if (stop_mass > 0) discharged = halo.sum_over_ranks(engine->removed_mass());
         const bool stop = stop_mass > 0 && discharged >= stop_mass;
-        const bool last = engine->step_count() == total_steps;
-        if ((engine->step_count() - cadence_origin) % every == 0 || empty || stop ||
-            (last && (!resumable || ends_at_config_end))) {
+        if (cadence.frame_at(engine->step_count(), empty || stop)) {
           output(true);
           watch.checkpoint_written();
-        } else if (requested[0] != 0 || requested[1] != 0 || (last && resumable)) {
+        } else if (requested[0] != 0 || requested[1] != 0 ||
+                   cadence.checkpoint_only_at(engine->step_count())) {
           output(true, false);
           watch.checkpoint_written();
         }
         if (requested[0] != 0) {
           if (rank == 0) {
-            fmt::print(stderr,
-                       "contactlab: stopped by signal {} at step {} (t = {:.6g} s): {} holds the "
-                       "run; the same command continues it\n",
-                       requested[0], engine->step_count(), engine->time_s(), outputs->checkpoint());
+            print_stopped_by_signal(requested[0], engine->step_count(), engine->time_s(),
+                                    outputs->checkpoint());
           }
           return 128 + requested[0];
         }

@@ -25,6 +25,31 @@ std::uint64_t last_step_of_run(std::uint64_t step_now, double time_now_s, double
          static_cast<std::uint64_t>(std::llround(std::max(0.0, end - time_now_s) / dt_s));
 }
 
+OutputCadence::OutputCadence(double output_every_s, double dt_s, std::uint64_t first_step,
+                             std::uint64_t last_step, bool resumable, bool ends_at_config_end)
+    // Without an output interval the cadence never comes inside the run: frames only at its end.
+    : every_(output_every_s > 0
+                 ? std::max<std::uint64_t>(
+                       1, static_cast<std::uint64_t>(std::llround(output_every_s / dt_s)))
+                 : std::max<std::uint64_t>(1, last_step)),
+      origin_(resumable ? 0 : first_step),
+      last_step_(last_step),
+      resumable_(resumable),
+      ends_at_config_end_(ends_at_config_end) {}
+
+bool OutputCadence::frame_at(std::uint64_t step, bool forced) const {
+  return (step - origin_) % every_ == 0 || forced ||
+         (step == last_step_ && (!resumable_ || ends_at_config_end_));
+}
+
+void print_stopped_by_signal(int signal, std::uint64_t step, double time_s,
+                             const std::string& checkpoint) {
+  fmt::print(stderr,
+             "contactlab: stopped by signal {} at step {} (t = {:.6g} s): {} holds the run; the "
+             "same command continues it\n",
+             signal, step, time_s, checkpoint);
+}
+
 RunWatch::RunWatch(const RunWatchOptions& options, const Standing& first, std::uint64_t last_step)
     : options_(options),
       watching_(options.progress_every_s > 0.0 || options.terminal ||

@@ -23,6 +23,31 @@ std::uint64_t last_step_of_run(std::uint64_t step_now, double time_now_s, double
                                std::uint64_t steps, std::optional<double> until_time_s,
                                double config_end_s);
 
+// Where a run's frames fall, and what the end of a batch writes; one process and --mpi alike.
+// Frames come every `output_every_s` (in steps) from the cadence's origin: the run's first step,
+// or step 0 under --resume, so that a resumed series is the unbroken run's. The last step writes
+// one too, except a --resume stop short of the config's end, whose checkpoint holds it instead.
+class OutputCadence {
+ public:
+  OutputCadence(double output_every_s, double dt_s, std::uint64_t first_step,
+                std::uint64_t last_step, bool resumable, bool ends_at_config_end);
+  std::uint64_t steps_to_next(std::uint64_t step) const {
+    return every_ - (step - origin_) % every_;
+  }
+  // A frame and checkpoint after `step` (`forced`: the run stops there for another reason).
+  bool frame_at(std::uint64_t step, bool forced) const;
+  // Only a checkpoint after `step`: a --resume run's stop short of the config's end.
+  bool checkpoint_only_at(std::uint64_t step) const { return resumable_ && step == last_step_; }
+
+ private:
+  std::uint64_t every_, origin_, last_step_;
+  bool resumable_, ends_at_config_end_;
+};
+
+// "contactlab: stopped by signal N at step S ...: FILE holds the run; ..." on stderr.
+void print_stopped_by_signal(int signal, std::uint64_t step, double time_s,
+                             const std::string& checkpoint);
+
 struct RunWatchOptions {
   double progress_every_s = 0.0;    // plain progress lines at least this often (0: none)
   bool terminal = false;            // stderr is a terminal: a bar redrawn in place
