@@ -205,6 +205,11 @@ void ContactDetector::assemble_half_rows(int tid, int threads) {
   spill_begin.assign(threads + 1, 0);
   RowBlockOf block_of(row_block_.data(), threads);
   const std::size_t find_count = mine.partners.size();
+  // The finds before own_until are all for this thread's rows: the write pass needs no check
+  // there. Under a block schedule of sorted particles, thread 0 of two on the paper scene finds
+  // its first spill 61 % of the way through its finds, and the last thread none (the checks on
+  // every find had cost the two-thread half stencil's assembly 4 ms of its 31).
+  std::size_t own_until = find_count;
   if (all_rows) {
     for (std::size_t at = 0; at < find_count; ++at) ++reverse[finds[at]];
   } else {
@@ -214,6 +219,7 @@ void ContactDetector::assemble_half_rows(int tid, int threads) {
       if (own_row(j)) [[likely]] {
         ++reverse[j];
       } else {
+        own_until = std::min(own_until, at);
         while (at >= home_end) home_end += found[homes[++k]];
         std::uint32_t* const pair = mine.spills.tail(2);
         pair[0] = j;
@@ -275,29 +281,31 @@ void ContactDetector::assemble_half_rows(int tid, int threads) {
   constexpr std::size_t kAhead = 64;
   std::uint32_t* const partners = contacts_.partners.data();
   const std::size_t total = mine.partners.size();
-  auto write_rows = [&](auto every_row_mine) {
-    constexpr bool kAll = decltype(every_row_mine)::value;
-    std::size_t at = 0;
-    for (std::size_t k = 0; k < home_count; ++k) {
-      const std::uint32_t h = homes[k];
-      const std::uint32_t count = found[h];
-      if (count == 0) continue;
-      std::memcpy(partners + offsets[h], finds + at, count * sizeof(std::uint32_t));
-      for (const std::size_t end = at + count; at < end; ++at) {
-        if (at + kAhead < total) {
-          const std::uint32_t ahead = finds[at + kAhead];
-          if (kAll || own_row(ahead))
-            __builtin_prefetch(partners + offsets[ahead] + reverse[ahead], 1);
-        }
-        const std::uint32_t j = finds[at];
-        if (kAll || own_row(j)) partners[offsets[j] + reverse[j]++] = h;
+  auto write_reverse = [&](std::uint32_t h, std::size_t at, std::size_t end, auto checked) {
+    constexpr bool kChecked = decltype(checked)::value;
+    for (; at < end; ++at) {
+      if (at + kAhead < total) {
+        const std::uint32_t ahead = finds[at + kAhead];
+        if (!kChecked || own_row(ahead))
+          __builtin_prefetch(partners + offsets[ahead] + reverse[ahead], 1);
       }
+      const std::uint32_t j = finds[at];
+      if (!kChecked || own_row(j)) partners[offsets[j] + reverse[j]++] = h;
     }
   };
-  if (all_rows) {
-    write_rows(std::true_type{});
-  } else {
-    write_rows(std::false_type{});
+  std::size_t at = 0;
+  for (std::size_t k = 0; k < home_count; ++k) {
+    const std::uint32_t h = homes[k];
+    const std::uint32_t count = found[h];
+    if (count == 0) continue;
+    std::memcpy(partners + offsets[h], finds + at, count * sizeof(std::uint32_t));
+    const std::size_t end = at + count;
+    if (end + kAhead <= own_until) {
+      write_reverse(h, at, end, std::false_type{});
+    } else {
+      write_reverse(h, at, end, std::true_type{});
+    }
+    at = end;
   }
   passed([&](std::uint32_t j, std::uint32_t h) { partners[offsets[j] + reverse[j]++] = h; });
 }
