@@ -81,6 +81,33 @@ void NetworkOptions::check() const {
   }
 }
 
+void MemoryOptions::add_to(CLI::App& app, const std::string& prices) {
+  app.add_option("--machine", machine_file,
+                 "also price " + prices +
+                     " by their bytes at the bandwidth of this machine file (`contactlab probe "
+                     "--json`)");
+  app.add_option("--bandwidth-ceiling", ceiling_gb_s,
+                 "--machine: the bandwidth the probed curve saturates towards beyond the "
+                 "machine's cores, GB/s (default: the last probed value)");
+  app.add_option("--ceiling-source", ceiling_source,
+                 "where the ceiling comes from (required with --bandwidth-ceiling)");
+}
+
+std::optional<tuner::MemorySystem> MemoryOptions::load() const {
+  if (ceiling_gb_s != 0.0) {
+    if (machine_file.empty()) {
+      throw InputError("--bandwidth-ceiling extends a machine file: give --machine");
+    }
+    if (!(ceiling_gb_s > 0.0)) throw InputError("--bandwidth-ceiling must be > 0 (GB/s)");
+    if (ceiling_source.empty()) {
+      throw InputError("--bandwidth-ceiling needs --ceiling-source (where the figure comes from)");
+    }
+  }
+  if (machine_file.empty()) return std::nullopt;
+  return tuner::MemorySystem{machine_file, tuner::read_machine_file(machine_file),
+                             ceiling_gb_s * 1e9, ceiling_source};
+}
+
 std::vector<std::string> split_list(const std::string& text) {
   std::vector<std::string> items;
   std::size_t pos = 0;

@@ -6,12 +6,14 @@
 #include <cstdint>
 #include <functional>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
 
 #include "contactlab/kernels/scene.hpp"
 #include "contactlab/kernels/scene_generate.hpp"
+#include "contactlab/tuner/bandwidth_probe.hpp"
 #include "contactlab/tuner/counter_record.hpp"
 #include "contactlab/tuner/result_schema.hpp"
 
@@ -112,6 +114,21 @@ struct NetworkOptions {
 
   void add_to(CLI::App& app);
   void check() const;  // InputError for latency < 0 or bandwidth <= 0
+};
+
+// The memory system an emulation prices bytes against (`dem profile --emulate`, `emulate
+// threads`): a machine file from `contactlab probe` and the ceiling beyond its cores, stated
+// with its source (docs/emulation.md, "Bandwidth").
+struct MemoryOptions {
+  std::string machine_file;
+  double ceiling_gb_s = 0.0;
+  std::string ceiling_source;
+
+  // `prices`: what the bytes price, for --machine's help.
+  void add_to(CLI::App& app, const std::string& prices);
+  // Nothing without --machine; else the file read back strictly. InputError for a ceiling
+  // without a machine file, one <= 0, or one without its source.
+  std::optional<tuner::MemorySystem> load() const;
 };
 
 std::vector<std::string> split_list(const std::string& text);

@@ -62,10 +62,7 @@ struct DemProfileCommand {
   DemStart start_;
   std::string variant_ = "ordered/static";
   std::vector<int> emulate_;
-  // The memory system the emulation prices bytes against (docs/emulation.md, "Bandwidth").
-  std::string machine_file_;
-  double ceiling_gb_s_ = 0.0;
-  std::string ceiling_source_;
+  MemoryOptions memory_;
   int rounds_ = 1;
   std::string json_out_;
   std::string command_line_;
@@ -82,18 +79,10 @@ int DemProfileCommand::run() const {
   for (const int t : emulate_) {
     if (t < 1) throw InputError("--emulate: every thread count must be >= 1");
   }
-  std::optional<tn::MachineProbe> machine;
-  if (!machine_file_.empty()) {
-    if (emulate_.empty()) throw InputError("--machine prices the emulation: give --emulate too");
-    machine = tn::read_machine_file(machine_file_);
+  if (!memory_.machine_file.empty() && emulate_.empty()) {
+    throw InputError("--machine prices the emulation: give --emulate too");
   }
-  if (ceiling_gb_s_ != 0.0) {
-    if (!machine) throw InputError("--bandwidth-ceiling extends a machine file: give --machine");
-    if (!(ceiling_gb_s_ > 0.0)) throw InputError("--bandwidth-ceiling must be > 0 (GB/s)");
-    if (ceiling_source_.empty()) {
-      throw InputError("--bandwidth-ceiling needs --ceiling-source (where the figure comes from)");
-    }
-  }
+  const std::optional<tn::MemorySystem> memory = memory_.load();
   if (!json_out_.empty()) prepare_output_file(json_out_);
   const std::uint64_t steps = start_.steps;
   const dem::Particles particles = dem::make_particles(config);
@@ -193,25 +182,12 @@ int DemProfileCommand::run() const {
     // The bytes a step moves, priced against the probed working set that holds the footprint.
     const dem::StepTraffic traffic = dem::step_traffic(particles.size(), work.total_pairs());
     std::optional<tn::BandwidthCurve> curve;
-    if (machine) {
-      std::vector<std::uint64_t> sizes;
-      for (const tn::ProbedWorkingSet& set : machine->working_sets) sizes.push_back(set.bytes);
-      const tn::ProbedWorkingSet& set =
-          machine->working_sets[tn::working_set_for(sizes, traffic.footprint_bytes)];
-      curve = tn::curve_of(set, ceiling_gb_s_ * 1e9);
-      bandwidth_json = {{"machine_file", machine_file_},
-                        {"working_set_bytes", set.bytes},
-                        {"footprint_bytes", traffic.footprint_bytes},
-                        {"bytes_per_step", traffic.bytes},
-                        {"ceiling_bytes_per_s", ceiling_gb_s_ * 1e9},
-                        {"ceiling_source", ceiling_source_}};
-      fmt::print(
-          "\nbandwidth: {} ({:.0f} MiB working set for a {:.0f} MiB footprint), {:.1f} MB a step "
-          "in the force pass and the drift; beyond the probed threads {}\n",
-          machine_file_, static_cast<double>(set.bytes) / (1 << 20),
-          static_cast<double>(traffic.footprint_bytes) / (1 << 20), traffic.bytes / 1e6,
-          ceiling_gb_s_ > 0 ? fmt::format("towards {} GB/s ({})", ceiling_gb_s_, ceiling_source_)
-                            : std::string("the last probed bandwidth (no ceiling stated)"));
+    if (memory) {
+      curve = memory->curve(traffic.footprint_bytes);
+      bandwidth_json = memory->json(traffic.footprint_bytes);
+      bandwidth_json["bytes_per_step"] = traffic.bytes;
+      fmt::print("\nbandwidth: {}; {:.1f} MB a step in the force pass and the drift\n",
+                 memory->describe(traffic.footprint_bytes), traffic.bytes / 1e6);
     }
     const std::vector<dem::EmulatedStep> emulated = dem::emulate_steps(
         work, variant, costs, {1, one, one_step},
@@ -307,14 +283,7 @@ Subcommand add_dem_profile_command(CLI::App& dem_app, const std::string& command
                   "also emulate these thread counts (e.g. 4,8,16; the step replayed by the force "
                   "model, checked at the measured counts)")
       ->delimiter(',');
-  app->add_option("--machine", profile->machine_file_,
-                  "--emulate: also price the force pass and drift by their bytes at the bandwidth "
-                  "of this machine file (`contactlab probe --json`)");
-  app->add_option("--bandwidth-ceiling", profile->ceiling_gb_s_,
-                  "--machine: the bandwidth the probed curve saturates towards beyond the "
-                  "machine's cores, GB/s (default: the last probed value)");
-  app->add_option("--ceiling-source", profile->ceiling_source_,
-                  "where the ceiling comes from (required with --bandwidth-ceiling)");
+  profile->memory_.add_to(*app, "--emulate's force pass and drift");
   app->add_option("--rounds", profile->rounds_,
                   "interleaved rounds over the thread counts (medians and 95% intervals; 1)");
   app->add_option("--json", profile->json_out_, "write the profile (docs/emulation.md)");

@@ -36,6 +36,7 @@ struct EmulateThreadsCommand {
   std::string measured_;  // default: 1 .. the machine's cores
   std::string chunk_threads_ = "2,4,8,16";
   int rounds_ = 7;
+  MemoryOptions memory_;
   std::string json_out_;
   std::string cache_file_;
   bool recalibrate_ = false;
@@ -43,6 +44,7 @@ struct EmulateThreadsCommand {
 
   int run() const {
     scene_.require_diameter();
+    const std::optional<tn::MemorySystem> memory = memory_.load();
     if (!json_out_.empty()) prepare_output_file(json_out_);
     tn::ThreadEmulationOptions options;
     // Variants are separated by ';' or by ',' before a loop name (a schedule has commas).
@@ -69,6 +71,7 @@ struct EmulateThreadsCommand {
       options.measured_threads = int_list(measured_, "--measured-threads");
     }
     options.rounds = rounds_;
+    options.memory = memory;
     validate(options);
     auto [scene, record] = scene_.load();
     tn::TuningCache cache(cache_file_.empty() ? tn::TuningCache::default_path() : cache_file_);
@@ -81,12 +84,18 @@ struct EmulateThreadsCommand {
     fmt::print("emulate threads: N {}, D {}; measured at {} thread(s), {} rounds\n", scene.size(),
                scene_.diameter_, fmt::join(options.measured_threads, ","), options.rounds);
     for (const tn::VariantEmulation& e : emulation.variants) {
-      fmt::print("\n{}  (anchor scale {:.3f})\n  {:>7} {:>12} {:>12} {:>9}  source\n",
-                 to_string(e.variant), e.anchor_scale, "threads", "T_ALL [s]", "T_c [s]",
-                 "speedup");
+      fmt::print("\n{}  (anchor scale {:.3f})\n", to_string(e.variant), e.anchor_scale);
+      if (memory) {
+        fmt::print("  bandwidth: {}; {:.0f} MB setup, {:.0f} MB loop, {:.0f} MB rows\n",
+                   memory->describe(e.traffic.footprint_bytes), e.traffic.setup_bytes / 1e6,
+                   e.traffic.loop_bytes / 1e6, e.traffic.rows_bytes / 1e6);
+      }
+      fmt::print("  {:>7} {:>12} {:>12} {:>9} {:>10}  source\n", "threads", "T_ALL [s]", "T_c [s]",
+                 "speedup", memory ? "memory [s]" : "");
       for (const tn::EmulatedThreads& p : e.emulated) {
-        fmt::print("  {:>7} {:>12.5f} {:>12.5f} {:>9.2f}  emulated\n", p.threads, p.total_s(),
-                   p.detect_s, p.speedup);
+        fmt::print("  {:>7} {:>12.5f} {:>12.5f} {:>9.2f} {:>10}  emulated\n", p.threads,
+                   p.total_s(), p.detect_s, p.speedup,
+                   memory ? fmt::format("{:.5f}", p.memory_s) : std::string());
       }
       for (const tn::EmulationCheck& c : e.checks) {
         fmt::print(
@@ -428,6 +437,7 @@ Subcommand add_emulate_command(CLI::App& app, const std::string& command_line) {
   t->add_option("--chunk-threads", threads->chunk_threads_,
                 "thread counts of the emulated chunk study (2,4,8,16)");
   t->add_option("--rounds", threads->rounds_, "interleaved rounds of timed runs (7)");
+  threads->memory_.add_to(*t, "every emulated phase");
   add_output_options(*t, threads->json_out_, threads->cache_file_, threads->recalibrate_);
 
   auto mpi = std::make_shared<EmulateMpiCommand>();

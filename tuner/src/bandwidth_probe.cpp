@@ -186,4 +186,29 @@ BandwidthCurve curve_of(const ProbedWorkingSet& set, double ceiling_bytes_per_s)
   return BandwidthCurve(set.bytes_per_s, ceiling_bytes_per_s);
 }
 
+const ProbedWorkingSet& MemorySystem::working_set(std::uint64_t footprint_bytes) const {
+  std::vector<std::uint64_t> sizes;
+  for (const ProbedWorkingSet& set : probe.working_sets) sizes.push_back(set.bytes);
+  return probe.working_sets[working_set_for(sizes, footprint_bytes)];
+}
+
+nlohmann::json MemorySystem::json(std::uint64_t footprint_bytes) const {
+  return {{"machine_file", machine_file},
+          {"working_set_bytes", working_set(footprint_bytes).bytes},
+          {"footprint_bytes", footprint_bytes},
+          {"ceiling_bytes_per_s", ceiling_bytes_per_s},
+          {"ceiling_source", ceiling_source}};
+}
+
+std::string MemorySystem::describe(std::uint64_t footprint_bytes) const {
+  constexpr double kMiB = 1 << 20;
+  return fmt::format(
+      "{} ({:.0f} MiB working set for a {:.0f} MiB footprint); beyond the probed threads {}",
+      machine_file, static_cast<double>(working_set(footprint_bytes).bytes) / kMiB,
+      static_cast<double>(footprint_bytes) / kMiB,
+      ceiling_bytes_per_s > 0
+          ? fmt::format("towards {} GB/s ({})", ceiling_bytes_per_s / 1e9, ceiling_source)
+          : std::string("the last probed bandwidth (no ceiling stated)"));
+}
+
 }  // namespace contactlab::tuner

@@ -9,6 +9,7 @@
 #include <optional>
 #include <set>
 
+#include "contactlab/kernels/cell_grid.hpp"
 #include "contactlab/kernels/error.hpp"
 #include "contactlab/tuner/measured_kernel.hpp"
 #include "contactlab/tuner/tuning_method.hpp"
@@ -246,6 +247,32 @@ ThreadEmulation emulate_threads(const Scene& scene, double diameter,
         std::max(one.detect_s.median - median(samples[i][0].assembly), 0.05 * one.detect_s.median);
     const AnchoredLoop loop(*model.prepared, model.costs, variant.schedule, loop_one);
     e.anchor_scale = loop.scale();
+    // With a machine file, a phase takes at least its bytes over the bandwidth of its threads.
+    std::optional<BandwidthCurve> curve;
+    if (options.memory) {
+      const CellGrid grid(
+          scene.box, scene.has_diameters() ? scene.max_diameter() : diameter,
+          variant.order == Order::kMorton ? CellNumbering::kMorton : CellNumbering::kLinear);
+      e.traffic =
+          detection_traffic(variant, {scene.size(), candidate_fetches(model.prepared->view()),
+                                      output.entries, grid.key_count(), scene.has_diameters()});
+      curve = options.memory->curve(e.traffic.footprint_bytes);
+    }
+    auto at_least_bytes = [&](double compute_s, double bytes, int threads) {
+      return curve ? roofline_seconds(compute_s, bytes, curve->at(threads)) : compute_s;
+    };
+    // The rows after the loop: the full stencil's only where its schedule leaves them to copy.
+    auto assembly_bytes = [&](int threads, const Schedule& schedule) {
+      const double share =
+          variant.stencil == Stencil::kHalf
+              ? 1.0
+              : kernel.copied_output_share(with_schedule(variant, schedule.kind, schedule.chunk),
+                                           threads);
+      return e.traffic.offsets_bytes + share * e.traffic.rows_bytes;
+    };
+    auto setup_s = [&](int threads) {
+      return at_least_bytes(setup.at(threads), e.traffic.setup_bytes, threads);
+    };
     // A chunked deal's locality factor at t threads: thread 0's share timed alone (less the
     // visit of the blocks by itself) over its anchored replay. A thread that jumps to its next
     // chunk finds little of the stencil's data in its caches, where the one-thread sweep had
@@ -272,28 +299,42 @@ ThreadEmulation emulate_threads(const Scene& scene, double diameter,
     auto loop_s = [&](int threads, const Schedule& schedule, double factor) {
       const ScheduleOutcome outcome = loop.replay(threads, schedule);
       const double region = loop.scale() * model.costs.seconds_per_region;
-      return std::pair{region + factor * (outcome.makespan_seconds - region), outcome.imbalance};
+      return std::pair{at_least_bytes(region + factor * (outcome.makespan_seconds - region),
+                                      e.traffic.loop_bytes, threads),
+                       outcome.imbalance};
+    };
+    // The copy and the rest of the assembly, as one pass over the rows.
+    auto after_loop_s = [&](int threads, const Schedule& schedule) {
+      return at_least_bytes(output_s(threads, schedule) + assembly.at(threads),
+                            assembly_bytes(threads, schedule), threads);
     };
     auto detect_s = [&](int threads, const Schedule& schedule) {
       return loop_s(threads, schedule, locality(schedule, threads)).first +
-             output_s(threads, schedule) + assembly.at(threads);
+             after_loop_s(threads, schedule);
     };
     for (const int t : options.threads) {
       const double factor = locality(variant.schedule, t);
       const auto [seconds, balance] = loop_s(t, variant.schedule, factor);
       const double copy = output_s(t, variant.schedule);
-      const double rest = assembly.at(t);
-      e.emulated.push_back(
-          {t, setup.at(t), seconds + copy + rest, 0.0, balance, copy, factor, rest});
+      const double after = after_loop_s(t, variant.schedule);
+      EmulatedThreads point{t,       setup_s(t), seconds + after, 0.0,
+                            balance, copy,       factor,          after - copy};
+      if (curve) {
+        point.bytes_per_s = curve->at(t);
+        point.memory_s =
+            (e.traffic.setup_bytes + e.traffic.loop_bytes + assembly_bytes(t, variant.schedule)) /
+            point.bytes_per_s;
+      }
+      e.emulated.push_back(point);
     }
-    const double one_thread_total = setup.at(1) + detect_s(1, variant.schedule);
+    const double one_thread_total = setup_s(1) + detect_s(1, variant.schedule);
     for (EmulatedThreads& point : e.emulated) point.speedup = one_thread_total / point.total_s();
     for (const MeasuredThreads& m : e.measured) {
       if (m.threads == 1) continue;
       // The check at the machine's cores: its own share's locality, timed alone like the rest.
       const double detect = detect_s(m.threads, variant.schedule);
       e.checks.push_back(
-          {m.threads, m.total_s.median, setup.at(m.threads) + detect, m.detect_s.median, detect});
+          {m.threads, m.total_s.median, setup_s(m.threads) + detect, m.detect_s.median, detect});
     }
     if (table7 == i) {
       for (const int t : options.chunk_threads) {
@@ -350,13 +391,25 @@ nlohmann::json emulation_document(const ThreadEmulation& emulation,
       "assembly after the loop (row offsets, the half stencil's reverse entries) = serial + "
       "parallel/P fitted from its measured 1- and {}-thread times less the copy; T_s = serial + "
       "parallel/P fitted from the measured 1- and "
-      "{}-thread T_s. Not modelled: memory bandwidth and shared caches as threads are added, "
-      "and caches that the split work comes to fit (superlinear speed-up): beyond this "
-      "machine's cores an emulated speed-up is what the schedule's balance allows.",
+      "{}-thread T_s. {}Not modelled: shared caches as threads are added, and caches that the "
+      "split work comes to fit (superlinear speed-up).",
       fmt::join(options.measured_threads, ", "), options.rounds, emulation.calibration.threads,
+      options.memory
+          ? "Bandwidth (the machine file in `bandwidth`): every phase (setup, loop, the rows "
+            "after it) takes at least its bytes, counted from the exact work and the data "
+            "layout, over the bandwidth its threads draw: the probe's at the thread counts it "
+            "measured, beyond them a saturating curve towards the stated ceiling. "
+          : "Not modelled: memory bandwidth (no machine file): beyond this machine's cores an "
+            "emulated speed-up is what the schedule's balance allows. ",
       *std::max_element(options.measured_threads.begin(), options.measured_threads.end()),
       *std::max_element(options.measured_threads.begin(), options.measured_threads.end()));
   doc["measured_threads"] = options.measured_threads;
+  doc["bandwidth"] = nullptr;
+  if (options.memory) {
+    doc["bandwidth"] = {{"machine_file", options.memory->machine_file},
+                        {"ceiling_bytes_per_s", options.memory->ceiling_bytes_per_s},
+                        {"ceiling_source", options.memory->ceiling_source}};
+  }
   nlohmann::json calibration = nlohmann::json::object();
   for (const auto& [key, s] : emulation.calibration.structures) {
     calibration[key] = {{"runs", s.runs}, {"rms_relative_error", s.rms_relative_error}};
@@ -368,6 +421,15 @@ nlohmann::json emulation_document(const ThreadEmulation& emulation,
   doc["variants"] = nlohmann::json::array();
   for (const VariantEmulation& e : emulation.variants) {
     nlohmann::json v{{"variant", to_string(e.variant)}, {"anchor_scale", e.anchor_scale}};
+    if (options.memory) {
+      const DetectionTraffic& t = e.traffic;
+      v["traffic"] = {{"setup_bytes", t.setup_bytes},
+                      {"loop_bytes", t.loop_bytes},
+                      {"rows_bytes", t.rows_bytes},
+                      {"offsets_bytes", t.offsets_bytes},
+                      {"footprint_bytes", t.footprint_bytes},
+                      {"working_set_bytes", options.memory->working_set(t.footprint_bytes).bytes}};
+    }
     v["measured"] = nlohmann::json::array();
     for (const MeasuredThreads& m : e.measured) {
       v["measured"].push_back({{"threads", m.threads},
@@ -378,15 +440,15 @@ nlohmann::json emulation_document(const ThreadEmulation& emulation,
     }
     v["emulated"] = nlohmann::json::array();
     for (const EmulatedThreads& p : e.emulated) {
-      v["emulated"].push_back({{"threads", p.threads},
-                               {"setup_s", p.setup_s},
-                               {"detect_s", p.detect_s},
-                               {"total_s", p.total_s()},
-                               {"speedup", p.speedup},
-                               {"imbalance", p.imbalance},
-                               {"output_s", p.output_s},
-                               {"assembly_s", p.assembly_s},
-                               {"locality_factor", p.locality}});
+      nlohmann::json point{
+          {"threads", p.threads},   {"setup_s", p.setup_s},       {"detect_s", p.detect_s},
+          {"total_s", p.total_s()}, {"speedup", p.speedup},       {"imbalance", p.imbalance},
+          {"output_s", p.output_s}, {"assembly_s", p.assembly_s}, {"locality_factor", p.locality}};
+      if (options.memory) {
+        point["bytes_per_s"] = p.bytes_per_s;
+        point["memory_s"] = p.memory_s;
+      }
+      v["emulated"].push_back(std::move(point));
     }
     v["validation"] = nlohmann::json::array();
     for (const EmulationCheck& c : e.checks) {

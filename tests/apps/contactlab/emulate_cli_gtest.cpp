@@ -99,6 +99,68 @@ TEST(EmulateCli, ThreadsWritesMeasuredEmulatedChecksAndChunks) {
   }
 }
 
+// A machine file as `contactlab probe --json` writes it: one working set, 1 and 2 threads.
+std::string write_machine_file(const TempDir& dir, double one_gb_s, double two_gb_s) {
+  const std::string path = dir.file("machine.json");
+  json doc{{"schema_version", 1},
+           {"kind", "contactlab-machine-probe"},
+           {"label", "measured"},
+           {"context", json::object()},
+           {"method", "hand-written for the test"},
+           {"working_sets",
+            {{{"bytes", 1 << 30},
+              {"points",
+               {{{"threads", 1}, {"bytes_per_s", one_gb_s * 1e9}},
+                {{"threads", 2}, {"bytes_per_s", two_gb_s * 1e9}}}}}}}};
+  std::ofstream(path) << doc.dump();
+  return path;
+}
+
+// With a machine file every emulated phase takes at least its bytes over the bandwidth its
+// threads draw: the file, the ceiling and its source are named, each variant's bytes are given,
+// and each point carries its bandwidth (the curve through the probe towards the ceiling).
+TEST(EmulateCli, ThreadsPricesEveryPhaseByItsBytes) {
+  TempDir dir;
+  const std::string out = dir.file("threads.json");
+  // 20 MB/s at one thread: a memory so slow that every phase is bound by its bytes.
+  const std::string machine = write_machine_file(dir, 0.02, 0.03);
+  const auto r = run_command(
+      with_cache() + contactlab_exe() + " emulate threads" + kScene +
+      " --variants particle/unsorted/full/static,particle/sorted/full/static"
+      " --threads 1,2,16 --measured-threads 1 --rounds 1"
+      " --chunk-threads 2 --machine " +
+      machine + " --bandwidth-ceiling 0.04 --ceiling-source 'a test figure' --json " + out);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const json doc = json::parse(slurp(out));
+  EXPECT_EQ(doc["bandwidth"]["machine_file"], machine);
+  EXPECT_EQ(doc["bandwidth"]["ceiling_source"], "a test figure");
+  EXPECT_DOUBLE_EQ(doc["bandwidth"]["ceiling_bytes_per_s"].get<double>(), 0.04e9);
+  ASSERT_EQ(doc["variants"].size(), 2u);
+  const double unsorted_loop = doc["variants"][0]["traffic"]["loop_bytes"].get<double>();
+  EXPECT_GT(unsorted_loop, 2 * doc["variants"][1]["traffic"]["loop_bytes"].get<double>())
+      << "a line per candidate against the sorted records streamed once";
+  for (const auto& v : doc["variants"]) {
+    const json& traffic = v["traffic"];
+    EXPECT_EQ(traffic["working_set_bytes"], 1 << 30);
+    const double bytes = traffic["setup_bytes"].get<double>() + traffic["loop_bytes"].get<double>();
+    for (const auto& p : v["emulated"]) {
+      const double b = p["bytes_per_s"].get<double>();
+      // Through (2, 30 MB/s) towards 40: K = 2 (40/30 - 1) = 2/3, B(16) = 40 x 16 / (16 + 2/3).
+      if (p["threads"] == 2) {
+        EXPECT_DOUBLE_EQ(b, 0.03e9);
+      } else if (p["threads"] == 16) {
+        EXPECT_NEAR(b, 0.04e9 * 16 / (16 + 2.0 / 3), 1.0);
+      }
+      EXPECT_GE(p["setup_s"].get<double>() * (1 + 1e-12), traffic["setup_bytes"].get<double>() / b)
+          << p;
+      EXPECT_GE(p["detect_s"].get<double>() * (1 + 1e-12), traffic["loop_bytes"].get<double>() / b)
+          << p;
+      EXPECT_GE(p["memory_s"].get<double>() * (1 + 1e-12), bytes / b) << p;
+    }
+  }
+  EXPECT_NE(doc["method"].get<std::string>().find("at least its bytes"), std::string::npos);
+}
+
 TEST(EmulateCli, MpiPredictsEverySeriesAndChecksAMeasuredRun) {
   TempDir dir;
   const std::string measured = dir.file("detect.json"), out = dir.file("mpi.json");
@@ -169,6 +231,8 @@ TEST(EmulateCli, BadInputIsOneLineAndKeepsTheOutput) {
       {" emulate threads --variants particle/sorted/ful/static", "ful"},
       {" emulate mpi --measured /nonexistent/d.json", "/nonexistent/d.json"},
       {" emulate mpi --block 0", "--block"},
+      {" emulate threads --bandwidth-ceiling 100", "give --machine"},
+      {" emulate threads --machine /nonexistent/m.json", "/nonexistent/m.json"},
   };
   for (const auto& [arguments, message] : cases) {
     const auto r =

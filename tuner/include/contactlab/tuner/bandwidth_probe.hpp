@@ -50,4 +50,25 @@ MachineProbe read_machine_file(const std::string& path);
 // A working set's curve with a stated ceiling (bytes/s; 0 for none).
 BandwidthCurve curve_of(const ProbedWorkingSet& set, double ceiling_bytes_per_s);
 
+// What an emulation prices bytes against: a machine file and, beyond its thread counts, the
+// ceiling the user states with its source (0 and empty for none).
+struct MemorySystem {
+  std::string machine_file;
+  MachineProbe probe;
+  double ceiling_bytes_per_s = 0.0;
+  std::string ceiling_source;
+
+  // The probed working set that holds `footprint_bytes` (else the largest: working_set_for).
+  const ProbedWorkingSet& working_set(std::uint64_t footprint_bytes) const;
+  // Its curve with the ceiling.
+  BandwidthCurve curve(std::uint64_t footprint_bytes) const {
+    return curve_of(working_set(footprint_bytes), ceiling_bytes_per_s);
+  }
+  // {machine_file, working_set_bytes, footprint_bytes, ceiling_bytes_per_s, ceiling_source}
+  nlohmann::json json(std::uint64_t footprint_bytes) const;
+  // "FILE (64 MiB working set for a 57 MiB footprint); beyond the probed threads towards C GB/s
+  // (SOURCE)" or "... the last probed bandwidth (no ceiling stated)".
+  std::string describe(std::uint64_t footprint_bytes) const;
+};
+
 }  // namespace contactlab::tuner

@@ -5,13 +5,16 @@
 #pragma once
 
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "contactlab/kernels/scene.hpp"
 #include "contactlab/kernels/variant.hpp"
 #include "contactlab/support/statistics.hpp"
+#include "contactlab/tuner/bandwidth_probe.hpp"
 #include "contactlab/tuner/tune.hpp"
+#include "contactlab/tuner_model/detection_traffic.hpp"
 
 namespace contactlab::tuner {
 
@@ -24,6 +27,9 @@ struct ThreadEmulationOptions {
   // particle/sorted/full variant's structure (the paper's Table 7 loop).
   std::vector<int> chunk_threads{2, 4, 8, 16};
   std::vector<int> chunk_grid = log2_chunk_grid(65536);
+  // With a machine file, every phase (setup, loop, the rows after it) takes at least its bytes
+  // (detection_traffic.hpp) over the bandwidth its threads draw: docs/emulation.md, "Bandwidth".
+  std::optional<MemorySystem> memory;
 };
 
 struct MeasuredThreads {
@@ -41,6 +47,8 @@ struct EmulatedThreads {
   // Of detect_s: the rest of the assembly after the loop (offsets, reverse entries), fitted as
   // serial + parallel / P from its measured times.
   double assembly_s = 0.0;
+  // With a machine file: the bandwidth at this thread count and the bytes of every phase over it.
+  double bytes_per_s = 0.0, memory_s = 0.0;
   double total_s() const { return setup_s + detect_s; }
 };
 
@@ -56,6 +64,7 @@ struct VariantEmulation {
   std::vector<MeasuredThreads> measured;
   std::vector<EmulatedThreads> emulated;
   std::vector<EmulationCheck> checks;  // at each measured thread count above 1
+  DetectionTraffic traffic;            // with a machine file
 };
 
 struct EmulatedChunkStudy {
