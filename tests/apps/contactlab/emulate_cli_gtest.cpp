@@ -161,6 +161,22 @@ TEST(EmulateCli, ThreadsPricesEveryPhaseByItsBytes) {
   EXPECT_NE(doc["method"].get<std::string>().find("at least its bytes"), std::string::npos);
 }
 
+// The half stencil writes every row in its assembly, measured whole: no modelled copy beside
+// it, so that one thread is its anchor too.
+TEST(EmulateCli, TheHalfStencilsOneThreadIsItsMeasurement) {
+  TempDir dir;
+  const std::string out = dir.file("half.json");
+  const auto r = run_command(with_cache() + contactlab_exe() + " emulate threads" + kScene +
+                             " --variants particle/sorted/half/static --threads 1,4"
+                             " --measured-threads 1,2 --rounds 1 --chunk-threads 2 --json " +
+                             out);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const json v = json::parse(slurp(out))["variants"][0];
+  EXPECT_NEAR(v["emulated"][0]["detect_s"].get<double>(),
+              v["measured"][0]["detect_s"]["median"].get<double>(), 1e-12);
+  for (const auto& p : v["emulated"]) EXPECT_EQ(p["output_s"].get<double>(), 0.0) << p;
+}
+
 TEST(EmulateCli, MpiPredictsEverySeriesAndChecksAMeasuredRun) {
   TempDir dir;
   const std::string measured = dir.file("detect.json"), out = dir.file("mpi.json");
