@@ -101,7 +101,7 @@ TEST(EmulateCli, ThreadsWritesMeasuredEmulatedChecksAndChunks) {
 
 // A machine file as `contactlab probe --json` writes it: one working set, 1 and 2 threads.
 std::string write_machine_file(const TempDir& dir, double one_gb_s, double two_gb_s) {
-  const std::string path = dir.file("machine.json");
+  std::string path = dir.file("machine.json");
   json doc{{"schema_version", 1},
            {"kind", "contactlab-machine-probe"},
            {"label", "measured"},

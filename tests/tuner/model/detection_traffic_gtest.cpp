@@ -65,10 +65,10 @@ TEST(DetectionTraffic, HalfStencilFloatAndDiameters) {
 
 TEST(DetectionTraffic, ARadixPassPerEightBitsOfKey) {
   DetectionWork work = kWork;
-  work.cell_keys = 200 * 200 * 200;  // 23 bits: three passes
+  work.cell_keys = std::uint64_t{200} * 200 * 200;  // 23 bits: three passes
   const double three =
       detection_traffic(variant(Order::kUnsorted, Stencil::kFull), work).setup_bytes;
-  work.cell_keys = 504 * 504 * 504;  // 27 bits: four
+  work.cell_keys = std::uint64_t{504} * 504 * 504;  // 27 bits: four
   const double four =
       detection_traffic(variant(Order::kUnsorted, Stencil::kFull), work).setup_bytes;
   EXPECT_DOUBLE_EQ(four - three, 16000.0 + 4.0 * (504.0 * 504 * 504 - 200.0 * 200 * 200));

@@ -31,7 +31,8 @@ DetectionTraffic detection_traffic(const Variant& variant, const DetectionWork& 
   // Registration: the coordinates read, a (key, particle) pair of 8 bytes written, then read and
   // written by every 8-bit radix pass; the cell index written one entry (4 bytes) a key.
   const auto key_bits = static_cast<int>(std::bit_width(work.cell_keys - 1));
-  const double passes = key_bits <= 8 ? 1.0 : static_cast<double>((key_bits + 7) / 8);
+  const int radix_passes = key_bits <= 8 ? 1 : (key_bits + 7) / 8;
+  const auto passes = static_cast<double>(radix_passes);
   t.setup_bytes = n * (input_record + 8.0) + passes * 2.0 * 8.0 * n + 4.0 * keys;
   if (sorted) {
     // The reordering gathers each particle's coordinates from the input arrays in cell order:
