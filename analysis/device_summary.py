@@ -140,7 +140,35 @@ def emulation_lines(path, measured, folder):
             speedup = one["total"] / here["total"]
             lines.append(f"| `{name}` | {t} | {speedup:.2f} | *{point['speedup']:.2f}*† | "
                          f"{100 * (point['speedup'] / speedup - 1):+.0f} % |")
-    return lines + ["", "† emulated (docs/emulation.md), not measured."]
+    lines += ["", "† emulated (docs/emulation.md), not measured."]
+    if doc.get("bandwidth"):
+        lines += [""] + bandwidth_lines(doc, measured)
+    return lines
+
+
+def bandwidth_lines(doc, measured):
+    """The loop's bytes (the emulation's count, docs/emulation.md "Bandwidth") over the loop
+    measured here: the bandwidth it drew, beside what the emulation's curve gives its threads."""
+    b = doc["bandwidth"]
+    ceiling = (f"towards {b['ceiling_bytes_per_s'] / 1e9:.0f} GB/s ({b['ceiling_source']})"
+               if b["ceiling_bytes_per_s"] > 0 else "the last probed value held")
+    lines = [f"Bytes against bandwidth: the emulation's machine file `{b['machine_file']}`, "
+             f"beyond its cores {ceiling}. *Drawn here* = the loop's bytes (counted from the work "
+             "and the layout) over the slowest thread's loop measured here.", "",
+             "| variant | threads | loop bytes [GB] | drawn here [GB/s] | emulated curve [GB/s] |",
+             "|---|---|---|---|---|"]
+    for v in doc["variants"]:
+        name, traffic = v["variant"], v.get("traffic")
+        if not traffic:
+            continue
+        for point in v["emulated"]:
+            here = measured.get((name, point["threads"]))
+            if not here or not here["loop"] > 0:
+                continue
+            lines.append(f"| `{name}` | {point['threads']} | {traffic['loop_bytes'] / 1e9:.2f} | "
+                         f"{traffic['loop_bytes'] / here['loop'] / 1e9:.1f} | "
+                         f"*{point['bytes_per_s'] / 1e9:.1f}*† |")
+    return lines
 
 
 def main():
