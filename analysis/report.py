@@ -15,7 +15,7 @@ import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
-from study import benchmark, chunk, dem, inputs, mpi, paper, scene_law, tuning  # noqa: E402
+from study import bandwidth, benchmark, chunk, dem, inputs, mpi, paper, scene_law, tuning  # noqa: E402
 from study.common import (EMULATED, FOOTNOTE_EMULATED, FOOTNOTE_PREDICTED, FOOTNOTE_SHORT,  # noqa: E402
                           PREDICTED, SHORT_INTERVAL, WITHIN_TARGET, SchemaError, load_json, load_kind,
                           load_results, num, optional, percent, relative_error, table,
@@ -132,6 +132,7 @@ def build(results_dir):
                   lambda out: paper.table6_section(optional(results_dir, "table6-cache.json"), takagi, out),
                   lambda out: _figure8(threads, takagi, figures_dir, out),
                   lambda out: scene_law.section(results_dir, takagi, out),
+                  lambda out: bandwidth.section(results_dir, out),
                   lambda out: mpi.section(model, takagi, figures_dir, out),
                   lambda out: chunk.section(study, emulation, tunings, figures_dir, out),
                   lambda out: dem.section(profile, otsuka, results_dir, figures_dir, out),

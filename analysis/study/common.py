@@ -23,7 +23,8 @@ FOOTNOTE_EMULATED = (f"{EMULATED} emulated, not measured: `contactlab emulate th
                      "profile --emulate`) price the loop's exact work per iteration with costs "
                      "calibrated on this machine, scale it to the measured one-thread time and replay "
                      "it under the schedule at the requested thread count (docs/emulation.md; the "
-                     "method is in the file). Memory bandwidth and cache sharing are not modelled. "
+                     "method is in the file). Cache sharing is not modelled; memory bandwidth only "
+                     "where the file names a machine file (section \"Memory bandwidth\"). "
                      "At a measured thread count the emulated value is shown to validate it.")
 FOOTNOTE_PREDICTED = (f"{PREDICTED} predicted: a performance model's value (emulation-mpi.json, "
                       "tuning/*.json), not a measurement.")

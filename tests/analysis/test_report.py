@@ -76,6 +76,15 @@ class ReportOnFixture(unittest.TestCase):
         for c in emulation["chunk_study"]:
             if c["schedule"] == "dynamic":
                 c["classic"] = [{"name": "factoring", "chunk": 512, "detect_s": 1.25 * c["best_detect_s"]}]
+        # Priced by bytes (emulate threads --machine): 10 GB of loop at 50 GB/s at 16 threads.
+        emulation["bandwidth"] = {"machine_file": "machine.json", "ceiling_bytes_per_s": 8e10,
+                                  "ceiling_source": "a stated figure"}
+        for v in emulation["variants"]:
+            v["traffic"] = {"setup_bytes": 1e8, "loop_bytes": 1e10, "rows_bytes": 2e8,
+                            "offsets_bytes": 8e6, "footprint_bytes": 6e7, "working_set_bytes": 67108864}
+            for e in v["emulated"]:
+                e["bytes_per_s"] = 5e10 if e["threads"] == 16 else 2e10
+                e["memory_s"] = 1.03e10 / e["bytes_per_s"]
         with open(threads_path, "w") as f:
             json.dump(emulation, f)
         # The pure-MPI series' slowest rank timed alone (emulate mpi writes it at every count).
@@ -266,6 +275,18 @@ class ReportOnFixture(unittest.TestCase):
         # The fixture's best leaf size at each thread count against the detector's median.
         self.assertIn("threads 1: nanoflann's best leaf size (24) / contactlab = **20.0x**", self.report)
         self.assertIn("threads 2: nanoflann's best leaf size (24) / contactlab = **26.4x**", self.report)
+
+    def test_bandwidth_gives_each_variants_bytes_beside_its_time(self):
+        text = self.section("## Memory bandwidth in the thread emulation")
+        self.assertIn("towards 80 GB/s (a stated figure)", text)
+        self.assertIn("`machine.json`", text)
+        with open(os.path.join(self.results, "emulation-threads.json")) as f:
+            v = json.load(f)["variants"][0]
+        last = max(v["emulated"], key=lambda e: e["threads"])
+        cells = self.row(text, [f"`{v['variant']}`"])
+        self.assertEqual(cells[1:6], ["0.1", "10", "0.2", "16", "*50*†"])
+        self.assertEqual(cells[6], f"*{0.206:.4g}*†")
+        self.assertEqual(cells[8], f"{0.206 / (last['setup_s'] + last['detect_s']):.0%}")
 
     def test_figures_exist(self):
         for name in ("fig8_speedup.png", "fig9_mpi_speedup.png", "fig10_mpi_efficiency.png",
