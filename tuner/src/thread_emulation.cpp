@@ -228,11 +228,15 @@ ThreadEmulation emulate_threads(const Scene& scene, double diameter,
     // which is measured whole below. (Priced by the copy's calibrated cost per entry as well,
     // the paper scene's half stencil emulated 67 ms of copy at one thread where its whole
     // assembly measured 44: the one-thread emulation missed its own anchor by 20 %.)
+    // The share of the rows written after the loop: all of them with the half stencil, which
+    // writes both directions in its assembly (copied_output_share is 1 there).
+    auto rows_share = [&](int threads, const Schedule& schedule) {
+      return kernel.copied_output_share(with_schedule(variant, schedule.kind, schedule.chunk),
+                                        threads);
+    };
     auto output_s = [&](int threads, const Schedule& schedule) {
       if (variant.stencil == Stencil::kHalf) return 0.0;
-      return output_seconds(*model.output_costs, output, threads) *
-             kernel.copied_output_share(with_schedule(variant, schedule.kind, schedule.chunk),
-                                        threads);
+      return output_seconds(*model.output_costs, output, threads) * rows_share(threads, schedule);
     };
     // The rest of the assembly after the loop (the row offsets, the half stencil's reverse
     // entries), measured at 1 and at the most threads less the modelled copy, and fitted as
@@ -268,12 +272,7 @@ ThreadEmulation emulate_threads(const Scene& scene, double diameter,
     };
     // The rows after the loop: the full stencil's only where its schedule leaves them to copy.
     auto assembly_bytes = [&](int threads, const Schedule& schedule) {
-      const double share =
-          variant.stencil == Stencil::kHalf
-              ? 1.0
-              : kernel.copied_output_share(with_schedule(variant, schedule.kind, schedule.chunk),
-                                           threads);
-      return e.traffic.offsets_bytes + share * e.traffic.rows_bytes;
+      return e.traffic.offsets_bytes + rows_share(threads, schedule) * e.traffic.rows_bytes;
     };
     auto setup_s = [&](int threads) {
       return at_least_bytes(setup.at(threads), e.traffic.setup_bytes, threads);
