@@ -76,6 +76,10 @@ void ContactDetector::detect(const CellGrid& grid, const Layout& layout, const P
     reverse_count_.resize(n);
     row_block_.assign(threads + 1, 0);
     home_run_.assign(2 * std::size_t(threads), 0);
+    if (own_until_.size() < static_cast<std::size_t>(threads)) {
+      own_until_ = std::vector<std::atomic<std::uint64_t>>(threads);
+    }
+    for (auto& until : own_until_) until.store(kOwnUntilUnknown, std::memory_order_relaxed);
   }
   contacts_.offsets.resize(std::size_t{n} + 1);
   range_sums_.assign(threads, 0);

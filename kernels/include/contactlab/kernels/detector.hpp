@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -41,6 +42,10 @@ struct alignas(64) ThreadOutput {
   PartnerBuffer spills;
   LargeVector<std::uint32_t> spills_by_row_block;
   std::vector<std::uint64_t> spill_begin;
+  // Half stencil, rows following homes: the reverse entries for this thread's rows that it took
+  // from the previous thread's finds itself, as (row, partner) pairs in that thread's finding
+  // order (that thread passes it none).
+  PartnerBuffer taken;
 };
 
 }  // namespace detail
@@ -217,7 +222,8 @@ class ContactDetector {
   // detection region.
   void assemble_rows(int tid, int threads, bool half, bool rows_in_blocks);
   void assemble_half_rows(int tid, int threads);
-  void choose_row_blocks(int tid, int threads);
+  void take_from_previous(int tid, std::uint32_t lo, std::uint32_t hi);
+  bool choose_row_blocks(int tid, int threads);
   void finish_offsets(int tid, int threads, std::uint32_t first, std::uint32_t last,
                       std::uint64_t rows_sum);
   void copy_row_blocks(int tid, int threads);
@@ -237,6 +243,10 @@ class ContactDetector {
   LargeVector<std::uint32_t> reverse_count_;
   std::vector<std::uint32_t> row_block_;
   std::vector<std::uint64_t> home_run_;
+  // Where each thread's finds stop being all for its own rows (kOwnUntilUnknown until it knows):
+  // the next thread takes its reverse entries from there on (assemble_half_rows).
+  static constexpr std::uint64_t kOwnUntilUnknown = UINT64_MAX;
+  std::vector<std::atomic<std::uint64_t>> own_until_;
   LargeVector<std::uint64_t> row_weight_;
 };
 
