@@ -210,7 +210,9 @@ void ContactDetector::take_from_previous(int tid, std::uint32_t lo, std::uint32_
 // Row j = j's own finds, then every find (h, j) made from another particle h: first those of the
 // thread assembling row j (from its own buffer), then those the other threads passed it, thread
 // by thread. A thread counts the reverse entries of its own rows as it reads its finds and passes
-// the others on grouped by the thread whose rows they are, so no count is kept per (thread, row).
+// the others on grouped by the thread whose rows they are, so no count is kept per (thread, row);
+// where the rows are the homes, those for the next thread's rows that one takes itself
+// (take_from_previous), in the same place of the order.
 void ContactDetector::assemble_half_rows(int tid, int threads) {
   const bool rows_are_homes = choose_row_blocks(tid, threads);
   detail::ThreadOutput& mine = thread_out_[tid];
