@@ -192,12 +192,17 @@ const ProbedWorkingSet& MemorySystem::working_set(std::uint64_t footprint_bytes)
   return probe.working_sets[working_set_for(sizes, footprint_bytes)];
 }
 
-nlohmann::json MemorySystem::json(std::uint64_t footprint_bytes) const {
+nlohmann::json MemorySystem::json() const {
   return {{"machine_file", machine_file},
-          {"working_set_bytes", working_set(footprint_bytes).bytes},
-          {"footprint_bytes", footprint_bytes},
           {"ceiling_bytes_per_s", ceiling_bytes_per_s},
           {"ceiling_source", ceiling_source}};
+}
+
+nlohmann::json MemorySystem::json(std::uint64_t footprint_bytes) const {
+  nlohmann::json priced = json();
+  priced["working_set_bytes"] = working_set(footprint_bytes).bytes;
+  priced["footprint_bytes"] = footprint_bytes;
+  return priced;
 }
 
 std::string MemorySystem::describe(std::uint64_t footprint_bytes) const {

@@ -413,12 +413,7 @@ nlohmann::json emulation_document(const ThreadEmulation& emulation,
       *std::max_element(options.measured_threads.begin(), options.measured_threads.end()),
       *std::max_element(options.measured_threads.begin(), options.measured_threads.end()));
   doc["measured_threads"] = options.measured_threads;
-  doc["bandwidth"] = nullptr;
-  if (options.memory) {
-    doc["bandwidth"] = {{"machine_file", options.memory->machine_file},
-                        {"ceiling_bytes_per_s", options.memory->ceiling_bytes_per_s},
-                        {"ceiling_source", options.memory->ceiling_source}};
-  }
+  doc["bandwidth"] = options.memory ? options.memory->json() : nlohmann::json(nullptr);
   nlohmann::json calibration = nlohmann::json::object();
   for (const auto& [key, s] : emulation.calibration.structures) {
     calibration[key] = {{"runs", s.runs}, {"rms_relative_error", s.rms_relative_error}};

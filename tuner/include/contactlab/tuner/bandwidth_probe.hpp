@@ -64,7 +64,9 @@ struct MemorySystem {
   BandwidthCurve curve(std::uint64_t footprint_bytes) const {
     return curve_of(working_set(footprint_bytes), ceiling_bytes_per_s);
   }
-  // {machine_file, working_set_bytes, footprint_bytes, ceiling_bytes_per_s, ceiling_source}
+  // {machine_file, ceiling_bytes_per_s, ceiling_source}: what a run was told
+  nlohmann::json json() const;
+  // The same with {working_set_bytes, footprint_bytes}: what a footprint was priced by
   nlohmann::json json(std::uint64_t footprint_bytes) const;
   // "FILE (64 MiB working set for a 57 MiB footprint); beyond the probed threads towards C GB/s
   // (SOURCE)" or "... the last probed bandwidth (no ceiling stated)".
