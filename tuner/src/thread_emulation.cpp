@@ -220,6 +220,12 @@ ThreadEmulation emulate_threads(const Scene& scene, double diameter,
         measured_threads[most] > 1
             ? AmdahlPhase::fit(setup_one, measured_threads[most], pooled_setup(variant, most))
             : AmdahlPhase::serial(setup_one);
+    // The share of the rows written after the loop: all of them with the half stencil, which
+    // writes both directions in its assembly (copied_output_share is 1 there).
+    auto rows_share = [&](int threads, const Schedule& schedule) {
+      return kernel.copied_output_share(with_schedule(variant, schedule.kind, schedule.chunk),
+                                        threads);
+    };
     // The rows copied after the loop (output_cost.hpp): the calibrated cost per entry times
     // the share of the entries the schedule leaves to copy at t threads. The full stencil at
     // one thread writes its rows in place and copies none, but under a chunked schedule at two
@@ -228,12 +234,6 @@ ThreadEmulation emulate_threads(const Scene& scene, double diameter,
     // which is measured whole below. (Priced by the copy's calibrated cost per entry as well,
     // the paper scene's half stencil emulated 67 ms of copy at one thread where its whole
     // assembly measured 44: the one-thread emulation missed its own anchor by 20 %.)
-    // The share of the rows written after the loop: all of them with the half stencil, which
-    // writes both directions in its assembly (copied_output_share is 1 there).
-    auto rows_share = [&](int threads, const Schedule& schedule) {
-      return kernel.copied_output_share(with_schedule(variant, schedule.kind, schedule.chunk),
-                                        threads);
-    };
     auto output_s = [&](int threads, const Schedule& schedule) {
       if (variant.stencil == Stencil::kHalf) return 0.0;
       return output_seconds(*model.output_costs, output, threads) * rows_share(threads, schedule);
