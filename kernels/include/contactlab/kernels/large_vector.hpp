@@ -21,12 +21,14 @@ namespace contactlab {
 // x[i], y[i] and z[i] in one set of every cache whose way is a divisor of 2 MiB: a 2-way L1
 // such as the FX10's (16 KiB a way) then holds two of the three, and the scalar pair loop
 // missed on every coordinate it read (simulated FX10, N = 300,000: 3.05 L1 misses per candidate
-// test instead of 0.125, docs/measurement.md). Consecutive allocations get colours 0..7, each
-// 17 lines of 64 B apart: distinct sets modulo 4 KiB and 16 KiB; lines stay 64-byte aligned.
+// test instead of 0.125, docs/measurement.md). Consecutive allocations get colours 0..3, 4 KiB
+// apart: distinct sets of a 16 KiB way. The step is whole 4 KiB pages because offsets within a
+// page cost x86 cores with 4 KiB ways and many of them (a 48 KiB 12-way L1) about 3 % of the
+// paper scene's pair loop (17 lines apart, interleaved against no offsets, 1 and 2 threads).
 namespace large_vector_detail {
 inline constexpr std::size_t kHugePage = std::size_t{2} << 20;
-inline constexpr std::size_t kColourStep = std::size_t{17} * 64;  // bytes
-inline constexpr std::size_t kColours = 8;
+inline constexpr std::size_t kColourStep = std::size_t{4096};  // bytes
+inline constexpr std::size_t kColours = 4;
 
 inline std::size_t next_colour_offset() {
   static std::atomic<std::size_t> next{0};
