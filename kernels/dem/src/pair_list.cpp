@@ -1,6 +1,8 @@
 // Neighbour-list rebuild: periodic ghosts, the shared traversal, reorder by cell, history merge.
 #include "contactlab/dem/pair_list.hpp"
 
+#include <omp.h>
+
 #include <algorithm>
 #include <bit>
 #include <cmath>
@@ -93,6 +95,32 @@ void radix_sort(std::vector<std::uint64_t>& keys, std::vector<std::uint32_t>& pa
   }
 }
 
+namespace {
+
+// values[0..n) replaced by their running sums: each thread sums an equal range, then adds the
+// sums of the ranges before it.
+void parallel_inclusive_scan(std::uint64_t* values, std::size_t n, int threads,
+                             std::vector<std::uint64_t>& range_sums) {
+  range_sums.assign(static_cast<std::size_t>(threads), 0);
+#pragma omp parallel num_threads(threads)
+  {
+    const auto t = static_cast<std::size_t>(omp_get_thread_num());
+    const auto team = static_cast<std::size_t>(omp_get_num_threads());
+    const std::size_t first = n * t / team, last = n * (t + 1) / team;
+    std::uint64_t running = 0;
+    for (std::size_t k = first; k < last; ++k) running = values[k] += running;
+    range_sums[t] = running;
+#pragma omp barrier
+    std::uint64_t base = 0;
+    for (std::size_t u = 0; u < t; ++u) base += range_sums[u];
+    if (base > 0) {
+      for (std::size_t k = first; k < last; ++k) values[k] += base;
+    }
+  }
+}
+
+}  // namespace
+
 std::uint64_t spring_key(std::uint32_t a, std::uint32_t b) {
   return a < b ? (std::uint64_t{a} << 32 | b) : (std::uint64_t{b} << 32 | a);
 }
@@ -138,9 +166,13 @@ RebuildStats NeighborBuilder::rebuild(Particles& p, PairList& pairs, const Domai
     }
   }
   // Displacements are measured from here on.
-  p.x0.assign(p.x.begin(), p.x.end());
-  p.y0.assign(p.y.begin(), p.y.end());
-  p.z0.assign(p.z.begin(), p.z.end());
+  for (auto* v : {&p.x0, &p.y0, &p.z0}) v->resize(n);
+#pragma omp parallel for schedule(static) num_threads(threads)
+  for (std::size_t k = 0; k < n; ++k) {
+    p.x0[k] = p.x[k];
+    p.y0[k] = p.y[k];
+    p.z0[k] = p.z[k];
+  }
   for (int a = 0; a < 3; ++a) {
     std::array<double, 3> s{0, 0, 0};
     s[a] = domain.length(a);
@@ -154,6 +186,7 @@ RebuildStats NeighborBuilder::rebuild(Particles& p, PairList& pairs, const Domai
   by_id_.resize(n);
   new_keys_.resize(n);
   std::uint32_t max_id = 0;
+#pragma omp parallel for schedule(static) num_threads(threads) reduction(max : max_id)
   for (std::size_t k = 0; k < n; ++k) {
     new_keys_[k] = p.id[k];
     by_id_[k] = static_cast<std::uint32_t>(k);
@@ -165,6 +198,7 @@ RebuildStats NeighborBuilder::rebuild(Particles& p, PairList& pairs, const Domai
   scene_.y.resize(n);
   scene_.z.resize(n);
   scene_.diameter.resize(n);
+#pragma omp parallel for schedule(static) num_threads(threads)
   for (std::size_t r = 0; r < n; ++r) {
     const std::uint32_t k = by_id_[r];
     scene_.x[r] = p.x[k];
@@ -206,13 +240,18 @@ RebuildStats NeighborBuilder::rebuild(Particles& p, PairList& pairs, const Domai
   stats.ghosts = ghost_owner_.size();
   Box box;
   for (int a = 0; a < 3; ++a) {
-    const std::vector<double>& c = a == 0 ? scene_.x : a == 1 ? scene_.y : scene_.z;
-    box.lo[a] = std::numeric_limits<double>::infinity();
-    box.hi[a] = -std::numeric_limits<double>::infinity();
-    for (const double v : c) {
-      box.lo[a] = std::min(box.lo[a], v);
-      box.hi[a] = std::max(box.hi[a], v);
+    const double* const c = (a == 0 ? scene_.x : a == 1 ? scene_.y : scene_.z).data();
+    const std::size_t size = scene_.x.size();  // ghosts included
+    double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+#pragma omp parallel for schedule(static) num_threads(threads) reduction(min                 \
+                                                                         : lo) reduction(max \
+                                                                                         : hi)
+    for (std::size_t k = 0; k < size; ++k) {
+      lo = std::min(lo, c[k]);
+      hi = std::max(hi, c[k]);
     }
+    box.lo[a] = lo;
+    box.hi[a] = hi;
   }
   if (ranks != nullptr) box = ranks->box_over_ranks(box);
   for (int a = 0; a < 3; ++a) {
@@ -240,36 +279,42 @@ RebuildStats NeighborBuilder::rebuild(Particles& p, PairList& pairs, const Domai
   }
   order_.resize(n);
   new_index_.resize(n);  // by scene row
-  for (std::size_t a = 0; a < n; ++a) {
-    order_[a] = by_id_[row_order_[a]];
-    new_index_[row_order_[a]] = static_cast<std::uint32_t>(a);
-  }
-  p.permute(order_);
-
-  pairs.i.clear();
-  pairs.j.clear();
-  pairs.image.clear();
+  pair_start_.resize(n + 1);
+  // A particle's pairs: its row's partners that are particles, and each periodic pair once,
+  // from its lower row.
+  auto kept = [&](std::uint32_t row, std::uint32_t q) {
+    return q < n || ghost_owner_[q - n] > row;
+  };
+#pragma omp parallel for schedule(static) num_threads(threads)
   for (std::size_t a = 0; a < n; ++a) {
     const std::uint32_t row = row_order_[a];
+    order_[a] = by_id_[row];
+    new_index_[row] = static_cast<std::uint32_t>(a);
+    std::uint64_t count = 0;
+    for (std::uint32_t q : list.partners_of(row)) count += kept(row, q);
+    pair_start_[a + 1] = count;
+  }
+  p.permute(order_, threads);
+
+  // The pairs in particle order, each thread filling the pairs of its particles from their
+  // offsets (a parallel prefix sum over the counts).
+  pair_start_[0] = 0;
+  parallel_inclusive_scan(pair_start_.data() + 1, n, threads, range_sums_);
+  const std::size_t count = pair_start_[n];
+  pairs.resize(count, rolling);
+#pragma omp parallel for schedule(static) num_threads(threads)
+  for (std::size_t a = 0; a < n; ++a) {
+    const std::uint32_t row = row_order_[a];
+    std::uint64_t k = pair_start_[a];
     for (std::uint32_t q : list.partners_of(row)) {
-      if (q < n) {
-        pairs.i.push_back(static_cast<std::uint32_t>(a));
-        pairs.j.push_back(new_index_[q]);
-        pairs.image.push_back(kNoImage);
-        continue;
-      }
-      const std::uint32_t owner = ghost_owner_[q - n];
-      if (owner <= row) continue;  // each periodic pair once, from its lower row
-      pairs.i.push_back(static_cast<std::uint32_t>(a));
-      pairs.j.push_back(new_index_[owner]);
-      pairs.image.push_back(ghost_image_[q - n]);
+      if (!kept(row, q)) continue;
+      pairs.i[k] = static_cast<std::uint32_t>(a);
+      pairs.j[k] = new_index_[q < n ? q : ghost_owner_[q - n]];
+      pairs.image[k] = q < n ? kNoImage : ghost_image_[q - n];
+      pairs.hx[k] = pairs.hy[k] = pairs.hz[k] = 0.0;
+      ++k;
     }
   }
-  const std::size_t count = pairs.i.size();
-  pairs.resize(count, rolling);
-  std::fill(pairs.hx.begin(), pairs.hx.end(), 0.0);
-  std::fill(pairs.hy.begin(), pairs.hy.end(), 0.0);
-  std::fill(pairs.hz.begin(), pairs.hz.end(), 0.0);
   stats.pairs = count;
 
   // 5. Merge the carried springs into the new list by sorted keys: O(pairs) radix sorts.

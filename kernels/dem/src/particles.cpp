@@ -2,15 +2,25 @@
 #include "contactlab/dem/particles.hpp"
 
 #include <numbers>
+#include <type_traits>
 
 namespace contactlab::dem {
 namespace {
 
+// The arrays of one element type take turns with one scratch array: each is gathered into the
+// scratch, on `threads` threads, and swapped with it, so the next array of that type is gathered
+// into the last one's storage. Fresh arrays had zeroed and faulted in 38 arrays' pages on one
+// thread at every rebuild (on the 900,000-particle hopper, a quarter of a rebuild).
 template <class T>
-void permute_one(std::vector<T>& v, std::span<const std::uint32_t> order) {
-  std::vector<T> permuted(v.size());
-  for (std::size_t a = 0; a < order.size(); ++a) permuted[a] = v[order[a]];
-  v.swap(permuted);
+void permute_one(std::vector<T>& v, std::vector<T>& scratch, std::span<const std::uint32_t> order,
+                 int threads) {
+  scratch.resize(v.size());
+  T* const out = scratch.data();
+  const T* const in = v.data();
+  const std::size_t n = order.size();
+#pragma omp parallel for schedule(static) num_threads(threads)
+  for (std::size_t a = 0; a < n; ++a) out[a] = in[order[a]];
+  v.swap(scratch);
 }
 
 }  // namespace
@@ -38,8 +48,20 @@ void Particles::add(std::uint32_t stable_id, std::uint16_t material_index, doubl
   inv_inertia[i] = 1.0 / (0.4 * mass[i] * r * r);
 }
 
-void Particles::permute(std::span<const std::uint32_t> order) {
-  for_each_array([order](auto& v) { permute_one(v, order); });
+void Particles::permute(std::span<const std::uint32_t> order, int threads) {
+  std::vector<std::uint32_t> scratch_u32;
+  std::vector<std::uint16_t> scratch_u16;
+  std::vector<double> scratch_f64;
+  auto scratch_for = [&](auto& v) -> auto& {
+    using T = typename std::remove_reference_t<decltype(v)>::value_type;
+    if constexpr (std::is_same_v<T, std::uint32_t>)
+      return scratch_u32;
+    else if constexpr (std::is_same_v<T, std::uint16_t>)
+      return scratch_u16;
+    else
+      return scratch_f64;
+  };
+  for_each_array([&](auto& v) { permute_one(v, scratch_for(v), order, threads); });
 }
 
 }  // namespace contactlab::dem

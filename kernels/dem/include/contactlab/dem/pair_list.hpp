@@ -113,6 +113,7 @@ class NeighborBuilder {
   std::vector<std::uint32_t> ghost_owner_;
   std::vector<std::uint8_t> ghost_image_;
   std::vector<std::uint32_t> by_id_, row_order_, order_, new_index_;
+  std::vector<std::uint64_t> pair_start_, range_sums_;  // pairs of each new particle; the scan's
   std::vector<std::uint64_t> new_keys_, scratch_keys_;
   std::vector<std::uint32_t> old_payload_, new_payload_, scratch_payload_;
   CarriedSprings old_springs_;

@@ -32,8 +32,9 @@ struct Particles {
   // Adds a sphere at rest; mass from the density [kg/m^3].
   void add(std::uint32_t stable_id, std::uint16_t material_index, double px, double py, double pz,
            double r, double density);
-  // Every array permuted: new index a holds what index order[a] held.
-  void permute(std::span<const std::uint32_t> order);
+  // Every array permuted: new index a holds what index order[a] held (gathered on `threads`
+  // threads; order.size() == size()).
+  void permute(std::span<const std::uint32_t> order, int threads = 1);
 
   // Calls f on every per-particle array, in one fixed order (the checkpoint's): growth,
   // permutation and checkpoints all go through this one list.
