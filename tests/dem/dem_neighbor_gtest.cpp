@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <numeric>
 #include <set>
 #include <tuple>
 
@@ -83,6 +84,30 @@ TEST(DemNeighborList, RadixSortSortsStably) {
   radix_sort(keys, payload, 21, ks, ps);
   EXPECT_EQ(keys, (std::vector<std::uint64_t>{1, 3, 3, 5, 5, 1u << 20}));
   EXPECT_EQ(payload, (std::vector<std::uint32_t>{3, 1, 5, 0, 2, 4}));
+}
+
+// On threads, each counting and scattering its own range (300,000 keys: up to 9 threads take
+// part), the order is the stable sort's, ties included.
+TEST(DemNeighborList, RadixSortOnThreadsIsTheStableSort) {
+  constexpr std::size_t kN = 300000;
+  std::vector<std::uint64_t> start(kN);
+  std::uint64_t state = 12345;
+  for (auto& key : start) {
+    state = state * 6364136223846793005u + 1442695040888963407u;
+    key = (state >> 20) & ((std::uint64_t{1} << 26) - 1) & ~std::uint64_t{0xff};  // many ties
+  }
+  std::vector<std::uint32_t> expected(kN);
+  std::iota(expected.begin(), expected.end(), 0u);
+  std::stable_sort(expected.begin(), expected.end(),
+                   [&](std::uint32_t a, std::uint32_t b) { return start[a] < start[b]; });
+  for (const int threads : {1, 2, 3, 9, 16}) {
+    std::vector<std::uint64_t> keys = start, ks;
+    std::vector<std::uint32_t> payload(kN), ps;
+    std::iota(payload.begin(), payload.end(), 0u);
+    radix_sort(keys, payload, 26, ks, ps, threads);
+    EXPECT_EQ(payload, expected) << threads << " threads";
+    EXPECT_TRUE(std::is_sorted(keys.begin(), keys.end())) << threads << " threads";
+  }
 }
 
 TEST(DemNeighborList, HistoryFollowsItsPairThroughAReorder) {

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <limits>
 #include <string>
+#include <utility>
 
 #include "contactlab/kernels/error.hpp"
 #include "contactlab/kernels/variant.hpp"
@@ -23,13 +24,62 @@ void PairList::resize(std::size_t n, bool rolling) {
   for (auto* v : {&roll_x, &roll_y, &roll_z}) v->resize(rolling ? n : 0);
 }
 
+namespace {
+
+// offsets[p] for p in [0, particles]: the first k with keys[k] >= p, for keys ascending and below
+// `particles`. Each k writes the offsets in (keys[k - 1], keys[k]], so the threads write apart.
+template <class Key>
+void offsets_of_sorted(const Key* keys, std::size_t count, std::size_t particles,
+                       std::uint32_t* offsets, int threads) {
+#pragma omp parallel for schedule(static) num_threads(threads)
+  for (std::size_t k = 0; k <= count; ++k) {
+    const std::size_t from = k == 0 ? 0 : static_cast<std::size_t>(keys[k - 1]) + 1;
+    const std::size_t to = k == count ? particles : static_cast<std::size_t>(keys[k]);
+    for (std::size_t p = from; p <= to; ++p) offsets[p] = static_cast<std::uint32_t>(k);
+  }
+}
+
+// buffers.payload: the indices 0..by.size() ordered by `by` (stable); buffers.keys: `by` so
+// ordered.
+void stable_order(const std::vector<std::uint32_t>& by, int bits, int threads,
+                  RadixBuffers& buffers) {
+  const std::size_t count = by.size();
+  buffers.keys.resize(count);
+  buffers.payload.resize(count);
+#pragma omp parallel for schedule(static) num_threads(threads)
+  for (std::size_t k = 0; k < count; ++k) {
+    buffers.keys[k] = by[k];
+    buffers.payload[k] = static_cast<std::uint32_t>(k);
+  }
+  radix_sort(buffers.keys, buffers.payload, bits, buffers.key_scratch, buffers.payload_scratch,
+             threads);
+}
+
+// v[k] becomes v[order[k]], gathered on `threads` threads into `scratch`, which it swaps with.
+template <class T>
+void gather(std::vector<T>& v, std::vector<T>& scratch, const std::vector<std::uint32_t>& order,
+            int threads) {
+  scratch.resize(v.size());
+#pragma omp parallel for schedule(static) num_threads(threads)
+  for (std::size_t k = 0; k < order.size(); ++k) scratch[k] = v[order[k]];
+  v.swap(scratch);
+}
+
+}  // namespace
+
 void PairList::build_csr(std::size_t particles) {
+  RadixBuffers buffers;
+  build_csr(particles, 1, buffers);
+}
+
+void PairList::build_csr(std::size_t particles, int threads, RadixBuffers& buffers) {
+  const std::size_t count = size();
   // Orient every pair from the later particle to the earlier one (j < i), so that particle a's
   // j sides all come from the rows (a, a + max_span]: the fused force pass gathers a as soon as
   // those rows are done. A swapped pair's spring is seen from the other side (negated) and its
   // image shift is negated (code 26 - code).
-  bool sorted = true;
-  for (std::size_t k = 0; k < size(); ++k) {
+#pragma omp parallel for schedule(static) num_threads(threads)
+  for (std::size_t k = 0; k < count; ++k) {
     if (j[k] > i[k]) {
       std::swap(i[k], j[k]);
       image[k] = static_cast<std::uint8_t>(26 - image[k]);
@@ -37,58 +87,80 @@ void PairList::build_csr(std::size_t particles) {
       hy[k] = -hy[k];
       hz[k] = -hz[k];
     }
-    sorted = sorted && (k == 0 || i[k - 1] <= i[k]);
   }
-  // Rows: grouped by i, ascending (a stable counting sort when the orientation broke it).
-  rows.assign(particles + 1, 0);
-  for (std::size_t k = 0; k < size(); ++k) ++rows[i[k] + 1];
-  for (std::size_t p = 0; p < particles; ++p) rows[p + 1] += rows[p];
+  bool sorted = true;
+#pragma omp parallel for schedule(static) num_threads(threads) reduction(&& : sorted)
+  for (std::size_t k = 1; k < count; ++k) sorted = sorted && i[k - 1] <= i[k];
+  const int index_bits = std::max(1, static_cast<int>(std::bit_width(particles)));
+  // Rows: grouped by i, ascending, each row's pairs in their order (a stable sort by i where the
+  // orientation broke it).
   if (!sorted) {
-    std::vector<std::uint32_t> at(rows.begin(), rows.end() - 1), order(size());
-    for (std::size_t k = 0; k < size(); ++k) order[at[i[k]]++] = static_cast<std::uint32_t>(k);
-    auto apply = [&](auto& v) {
-      auto copy = v;
-      for (std::size_t k = 0; k < size(); ++k) v[k] = copy[order[k]];
-    };
-    apply(i);
-    apply(j);
-    apply(image);
-    apply(hx);
-    apply(hy);
-    apply(hz);
+    stable_order(i, index_bits, threads, buffers);
+    const std::vector<std::uint32_t>& order = buffers.payload;
+    std::vector<std::uint32_t> indices;
+    std::vector<std::uint8_t> images;
+    std::vector<double> springs;
+    gather(i, indices, order, threads);
+    gather(j, indices, order, threads);
+    gather(image, images, order, threads);
+    gather(hx, springs, order, threads);
+    gather(hy, springs, order, threads);
+    gather(hz, springs, order, threads);
   }
-  max_span = 0;
-  for (std::size_t k = 0; k < size(); ++k) max_span = std::max<std::size_t>(max_span, i[k] - j[k]);
+  rows.resize(particles + 1);
+  offsets_of_sorted(i.data(), count, particles, rows.data(), threads);
+  std::size_t span = 0;
+#pragma omp parallel for schedule(static) num_threads(threads) reduction(max : span)
+  for (std::size_t k = 0; k < count; ++k) span = std::max<std::size_t>(span, i[k] - j[k]);
+  max_span = span;
   // The pairs where each particle is the j, in pair order.
-  j_offsets.assign(particles + 1, 0);
-  for (std::size_t k = 0; k < size(); ++k) ++j_offsets[j[k] + 1];
-  for (std::size_t p = 0; p < particles; ++p) j_offsets[p + 1] += j_offsets[p];
-  j_pairs.resize(j_offsets[particles]);
-  std::vector<std::uint32_t> next(j_offsets.begin(), j_offsets.end() - 1);
-  for (std::size_t k = 0; k < size(); ++k) j_pairs[next[j[k]]++] = static_cast<std::uint32_t>(k);
+  stable_order(j, index_bits, threads, buffers);
+  j_pairs.swap(buffers.payload);
+  j_offsets.resize(particles + 1);
+  offsets_of_sorted(buffers.keys.data(), count, particles, j_offsets.data(), threads);
 }
 
 void radix_sort(std::vector<std::uint64_t>& keys, std::vector<std::uint32_t>& payload, int bits,
                 std::vector<std::uint64_t>& key_scratch,
-                std::vector<std::uint32_t>& payload_scratch) {
+                std::vector<std::uint32_t>& payload_scratch, int threads) {
   constexpr int kDigit = 11;
+  constexpr std::size_t kBuckets = std::size_t{1} << kDigit;
   const std::size_t n = keys.size();
   key_scratch.resize(n);
   payload_scratch.resize(n);
-  std::vector<std::uint32_t> count(std::size_t{1} << kDigit);
+  // At most a thread for every 16 buckets' worth of entries: each thread's counts cost kBuckets.
+  const int team = static_cast<int>(
+      std::clamp<std::size_t>(n / (16 * kBuckets), 1, static_cast<std::size_t>(threads)));
+  std::vector<std::uint64_t> counts(kBuckets * static_cast<std::size_t>(team));
   for (int shift = 0; shift < bits; shift += kDigit) {
-    std::fill(count.begin(), count.end(), 0u);
-    for (std::size_t k = 0; k < n; ++k) ++count[(keys[k] >> shift) & ((1u << kDigit) - 1)];
-    std::uint32_t sum = 0;
-    for (auto& c : count) {
-      const std::uint32_t here = c;
-      c = sum;
-      sum += here;
-    }
-    for (std::size_t k = 0; k < n; ++k) {
-      const std::uint32_t at = count[(keys[k] >> shift) & ((1u << kDigit) - 1)]++;
-      key_scratch[at] = keys[k];
-      payload_scratch[at] = payload[k];
+    const std::uint64_t* const in_keys = keys.data();
+    const std::uint32_t* const in_payload = payload.data();
+    std::uint64_t* const out_keys = key_scratch.data();
+    std::uint32_t* const out_payload = payload_scratch.data();
+    auto digit = [shift](std::uint64_t key) { return (key >> shift) & (kBuckets - 1); };
+#pragma omp parallel num_threads(team)
+    {
+      const auto t = static_cast<std::size_t>(omp_get_thread_num());
+      const auto size = static_cast<std::size_t>(omp_get_num_threads());
+      const std::size_t first = n * t / size, last = n * (t + 1) / size;
+      std::uint64_t* const mine = counts.data() + t * kBuckets;
+      std::fill(mine, mine + kBuckets, 0);
+      for (std::size_t k = first; k < last; ++k) ++mine[digit(in_keys[k])];
+#pragma omp barrier
+#pragma omp single
+      {  // where each (bucket, thread) starts: bucket by bucket, thread by thread (stable)
+        std::uint64_t running = 0;
+        for (std::size_t bucket = 0; bucket < kBuckets; ++bucket) {
+          for (std::size_t u = 0; u < size; ++u) {
+            running += std::exchange(counts[u * kBuckets + bucket], running);
+          }
+        }
+      }  // implicit barrier
+      for (std::size_t k = first; k < last; ++k) {
+        const std::uint64_t at = mine[digit(in_keys[k])]++;
+        out_keys[at] = in_keys[k];
+        out_payload[at] = in_payload[k];
+      }
     }
     keys.swap(key_scratch);
     payload.swap(payload_scratch);
@@ -184,16 +256,16 @@ RebuildStats NeighborBuilder::rebuild(Particles& p, PairList& pairs, const Domai
   // The scene's rows in stable-id order (by_id_[row] = particle), so that the cell order's
   // ties and every row's partners follow the ids, not the order the particles came in.
   by_id_.resize(n);
-  new_keys_.resize(n);
+  sort_.keys.resize(n);
   std::uint32_t max_id = 0;
 #pragma omp parallel for schedule(static) num_threads(threads) reduction(max : max_id)
   for (std::size_t k = 0; k < n; ++k) {
-    new_keys_[k] = p.id[k];
+    sort_.keys[k] = p.id[k];
     by_id_[k] = static_cast<std::uint32_t>(k);
     max_id = std::max(max_id, p.id[k]);
   }
-  radix_sort(new_keys_, by_id_, std::max(1, static_cast<int>(std::bit_width(max_id))),
-             scratch_keys_, scratch_payload_);
+  radix_sort(sort_.keys, by_id_, std::max(1, static_cast<int>(std::bit_width(max_id))),
+             sort_.key_scratch, sort_.payload_scratch, threads);
   scene_.x.resize(n);
   scene_.y.resize(n);
   scene_.z.resize(n);
@@ -320,33 +392,42 @@ RebuildStats NeighborBuilder::rebuild(Particles& p, PairList& pairs, const Domai
   // 5. Merge the carried springs into the new list by sorted keys: O(pairs) radix sorts.
   if (carried->size() > 0) {
     std::vector<std::uint64_t>& old_keys = carried->keys;
-    old_payload_.resize(old_keys.size());
-    for (std::size_t k = 0; k < old_keys.size(); ++k) {
+    const std::size_t old_count = old_keys.size();
+    old_payload_.resize(old_count);
+#pragma omp parallel for schedule(static) num_threads(threads) reduction(max : max_id)
+    for (std::size_t k = 0; k < old_count; ++k) {
       old_payload_[k] = static_cast<std::uint32_t>(k);
       max_id = std::max<std::uint32_t>(max_id, static_cast<std::uint32_t>(old_keys[k]));
     }
-    new_keys_.resize(count);
-    new_payload_.resize(count);
+    std::vector<std::uint64_t>& new_keys = sort_.keys;
+    std::vector<std::uint32_t>& new_payload = sort_.payload;
+    new_keys.resize(count);
+    new_payload.resize(count);
+#pragma omp parallel for schedule(static) num_threads(threads)
     for (std::size_t k = 0; k < count; ++k) {
-      new_keys_[k] = spring_key(p.id[pairs.i[k]], p.id[pairs.j[k]]);
-      new_payload_[k] = static_cast<std::uint32_t>(k);
+      new_keys[k] = spring_key(p.id[pairs.i[k]], p.id[pairs.j[k]]);
+      new_payload[k] = static_cast<std::uint32_t>(k);
     }
     const int id_bits = std::max(1, static_cast<int>(std::bit_width(max_id)));
     // Keys are lo << 32 | hi: sort the low id_bits of each half (two rounds over the key).
     auto sort_keys = [&](std::vector<std::uint64_t>& keys, std::vector<std::uint32_t>& payload) {
-      for (auto& key : keys) key = (key >> 32) << id_bits | (key & 0xffffffffu);
-      radix_sort(keys, payload, 2 * id_bits, scratch_keys_, scratch_payload_);
+      const std::size_t size = keys.size();
+#pragma omp parallel for schedule(static) num_threads(threads)
+      for (std::size_t k = 0; k < size; ++k) {
+        keys[k] = (keys[k] >> 32) << id_bits | (keys[k] & 0xffffffffu);
+      }
+      radix_sort(keys, payload, 2 * id_bits, sort_.key_scratch, sort_.payload_scratch, threads);
     };
     sort_keys(old_keys, old_payload_);
-    sort_keys(new_keys_, new_payload_);
+    sort_keys(new_keys, new_payload);
     std::size_t a = 0;
-    for (std::size_t b = 0; a < old_keys.size() && b < count;) {
-      if (old_keys[a] < new_keys_[b]) {
+    for (std::size_t b = 0; a < old_count && b < count;) {
+      if (old_keys[a] < new_keys[b]) {
         ++a;
-      } else if (new_keys_[b] < old_keys[a]) {
+      } else if (new_keys[b] < old_keys[a]) {
         ++b;
       } else {
-        const std::uint32_t k = new_payload_[b];
+        const std::uint32_t k = new_payload[b];
         const double sign = p.id[pairs.i[k]] < p.id[pairs.j[k]] ? 1.0 : -1.0;
         const double* s = &carried->springs[3 * std::size_t{old_payload_[a]}];
         pairs.hx[k] = sign * s[0];
@@ -358,7 +439,7 @@ RebuildStats NeighborBuilder::rebuild(Particles& p, PairList& pairs, const Domai
       }
     }
   }
-  pairs.build_csr(n);
+  pairs.build_csr(n, threads, sort_);
   return stats;
 }
 

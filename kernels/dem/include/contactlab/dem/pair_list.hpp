@@ -25,6 +25,13 @@ struct Domain {
 // at x_j + (ix Lx, iy Ly, iz Lz). kNoImage: the partner itself.
 inline constexpr std::uint8_t kNoImage = 13;
 
+// What a stable radix sort of indices works in (keys and payloads, and their scratch), kept
+// between rebuilds so that no rebuild zeroes or faults in fresh arrays of the pairs' length.
+struct RadixBuffers {
+  std::vector<std::uint64_t> keys, key_scratch;
+  std::vector<std::uint32_t> payload, payload_scratch;
+};
+
 struct PairList {
   std::vector<std::uint32_t> i, j;  // particle indices (current order)
   std::vector<std::uint8_t> image;  // periodic image code of j
@@ -54,7 +61,9 @@ struct PairList {
 
   std::size_t size() const { return i.size(); }
   void resize(std::size_t n, bool rolling);
-  // Orients (j < i, springs and images follow), groups by i, and indexes rows and j sides.
+  // Orients (j < i, springs and images follow), groups by i, and indexes rows and j sides, on
+  // `threads` threads (the same lists for any count).
+  void build_csr(std::size_t particles, int threads, RadixBuffers& buffers);
   void build_csr(std::size_t particles);
 };
 
@@ -114,14 +123,16 @@ class NeighborBuilder {
   std::vector<std::uint8_t> ghost_image_;
   std::vector<std::uint32_t> by_id_, row_order_, order_, new_index_;
   std::vector<std::uint64_t> pair_start_, range_sums_;  // pairs of each new particle; the scan's
-  std::vector<std::uint64_t> new_keys_, scratch_keys_;
-  std::vector<std::uint32_t> old_payload_, new_payload_, scratch_payload_;
+  RadixBuffers sort_;  // the new list's keys and payloads, and every sort's scratch
+  std::vector<std::uint32_t> old_payload_;
   CarriedSprings old_springs_;
 };
 
-// LSD radix sort of keys < 2^bits with their payloads (stable): O(n) per 11-bit digit.
+// LSD radix sort of keys < 2^bits with their payloads (stable): O(n / P + 2048 P) per 11-bit
+// digit on P = `threads` threads (each counts and scatters an equal range), the same result for
+// any P.
 void radix_sort(std::vector<std::uint64_t>& keys, std::vector<std::uint32_t>& payload, int bits,
                 std::vector<std::uint64_t>& key_scratch,
-                std::vector<std::uint32_t>& payload_scratch);
+                std::vector<std::uint32_t>& payload_scratch, int threads = 1);
 
 }  // namespace contactlab::dem
