@@ -97,15 +97,12 @@ void PairList::build_csr(std::size_t particles, int threads, RadixBuffers& buffe
   if (!sorted) {
     stable_order(i, index_bits, threads, buffers);
     const std::vector<std::uint32_t>& order = buffers.payload;
-    std::vector<std::uint32_t> indices;
-    std::vector<std::uint8_t> images;
-    std::vector<double> springs;
-    gather(i, indices, order, threads);
-    gather(j, indices, order, threads);
-    gather(image, images, order, threads);
-    gather(hx, springs, order, threads);
-    gather(hy, springs, order, threads);
-    gather(hz, springs, order, threads);
+    gather(i, buffers.payload_scratch, order, threads);
+    gather(j, buffers.payload_scratch, order, threads);
+    gather(image, buffers.byte_scratch, order, threads);
+    gather(hx, buffers.real_scratch, order, threads);
+    gather(hy, buffers.real_scratch, order, threads);
+    gather(hz, buffers.real_scratch, order, threads);
   }
   rows.resize(particles + 1);
   offsets_of_sorted(i.data(), count, particles, rows.data(), threads);

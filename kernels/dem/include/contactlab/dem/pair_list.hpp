@@ -26,10 +26,14 @@ struct Domain {
 inline constexpr std::uint8_t kNoImage = 13;
 
 // What a stable radix sort of indices works in (keys and payloads, and their scratch), kept
-// between rebuilds so that no rebuild zeroes or faults in fresh arrays of the pairs' length.
+// between rebuilds so that no rebuild zeroes or faults in fresh arrays of the pairs' length (and
+// the arrays it swaps with keep their grown capacity).
 struct RadixBuffers {
   std::vector<std::uint64_t> keys, key_scratch;
   std::vector<std::uint32_t> payload, payload_scratch;
+  // What the pairs' arrays are gathered into and swapped with (payload_scratch for the indices).
+  std::vector<std::uint8_t> byte_scratch;
+  std::vector<double> real_scratch;
 };
 
 struct PairList {
