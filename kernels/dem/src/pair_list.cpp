@@ -194,13 +194,40 @@ std::uint64_t spring_key(std::uint32_t a, std::uint32_t b) {
   return a < b ? (std::uint64_t{a} << 32 | b) : (std::uint64_t{b} << 32 | a);
 }
 
-void collect_springs(const Particles& p, const PairList& pairs, CarriedSprings& out) {
-  out.clear();
-  for (std::size_t k = 0; k < pairs.size(); ++k) {
-    if (pairs.hx[k] == 0.0 && pairs.hy[k] == 0.0 && pairs.hz[k] == 0.0) continue;
-    const std::uint32_t a = p.id[pairs.i[k]], b = p.id[pairs.j[k]];
-    const double sign = a < b ? 1.0 : -1.0;  // seen from i: turned to the lower id's view
-    out.add(spring_key(a, b), sign * pairs.hx[k], sign * pairs.hy[k], sign * pairs.hz[k]);
+void collect_springs(const Particles& p, const PairList& pairs, CarriedSprings& out, int threads) {
+  const std::size_t count = pairs.size();
+  auto touching = [&](std::size_t k) {
+    return pairs.hx[k] != 0.0 || pairs.hy[k] != 0.0 || pairs.hz[k] != 0.0;
+  };
+  // In pair order: each thread counts its range's springs, then writes them after the ranges
+  // before it.
+  std::vector<std::size_t> range_start(static_cast<std::size_t>(threads) + 1, 0);
+#pragma omp parallel num_threads(threads)
+  {
+    const auto t = static_cast<std::size_t>(omp_get_thread_num());
+    const auto size = static_cast<std::size_t>(omp_get_num_threads());
+    const std::size_t first = count * t / size, last = count * (t + 1) / size;
+    std::size_t mine = 0;
+    for (std::size_t k = first; k < last; ++k) mine += touching(k);
+    range_start[t + 1] = mine;
+#pragma omp barrier
+#pragma omp single
+    {
+      for (std::size_t u = 0; u < size; ++u) range_start[u + 1] += range_start[u];
+      out.keys.resize(range_start[size]);
+      out.springs.resize(3 * range_start[size]);
+    }  // implicit barrier
+    std::size_t at = range_start[t];
+    for (std::size_t k = first; k < last; ++k) {
+      if (!touching(k)) continue;
+      const std::uint32_t a = p.id[pairs.i[k]], b = p.id[pairs.j[k]];
+      const double sign = a < b ? 1.0 : -1.0;  // seen from i: turned to the lower id's view
+      out.keys[at] = spring_key(a, b);
+      out.springs[3 * at] = sign * pairs.hx[k];
+      out.springs[3 * at + 1] = sign * pairs.hy[k];
+      out.springs[3 * at + 2] = sign * pairs.hz[k];
+      ++at;
+    }
   }
 }
 
@@ -211,7 +238,7 @@ RebuildStats NeighborBuilder::rebuild(Particles& p, PairList& pairs, const Domai
   RebuildStats stats;
   // 1. The touching pairs' springs, keyed by stable ids (oriented from the lower id).
   if (carried == nullptr) {
-    collect_springs(p, pairs, old_springs_);
+    collect_springs(p, pairs, old_springs_, threads);
     carried = &old_springs_;
   }
 
@@ -417,24 +444,44 @@ RebuildStats NeighborBuilder::rebuild(Particles& p, PairList& pairs, const Domai
     };
     sort_keys(old_keys, old_payload_);
     sort_keys(new_keys, new_payload);
-    std::size_t a = 0;
-    for (std::size_t b = 0; a < old_count && b < count;) {
-      if (old_keys[a] < new_keys[b]) {
-        ++a;
-      } else if (new_keys[b] < old_keys[a]) {
-        ++b;
-      } else {
-        const std::uint32_t k = new_payload[b];
-        const double sign = p.id[pairs.i[k]] < p.id[pairs.j[k]] ? 1.0 : -1.0;
-        const double* s = &carried->springs[3 * std::size_t{old_payload_[a]}];
-        pairs.hx[k] = sign * s[0];
-        pairs.hy[k] = sign * s[1];
-        pairs.hz[k] = sign * s[2];
-        ++stats.carried_contacts;
-        ++a;
-        ++b;
+    // Each thread walks a range of the new keys from the first old key not below its first; a
+    // range starts where a key differs from the one before it, so an equal key is matched once,
+    // as one walk from the start would match it.
+    auto range_edge = [&](std::size_t b) {
+      while (b > 0 && b < count && new_keys[b] == new_keys[b - 1]) ++b;
+      return b;
+    };
+    std::size_t carried_contacts = 0;
+#pragma omp parallel num_threads(threads) reduction(+ : carried_contacts)
+    {
+      const auto t = static_cast<std::size_t>(omp_get_thread_num());
+      const auto size = static_cast<std::size_t>(omp_get_num_threads());
+      const std::size_t last = range_edge(count * (t + 1) / size);
+      std::size_t b = range_edge(count * t / size);
+      std::size_t a = b < last
+                          ? static_cast<std::size_t>(
+                                std::lower_bound(old_keys.begin(), old_keys.end(), new_keys[b]) -
+                                old_keys.begin())
+                          : old_count;
+      while (a < old_count && b < last) {
+        if (old_keys[a] < new_keys[b]) {
+          ++a;
+        } else if (new_keys[b] < old_keys[a]) {
+          ++b;
+        } else {
+          const std::uint32_t k = new_payload[b];
+          const double sign = p.id[pairs.i[k]] < p.id[pairs.j[k]] ? 1.0 : -1.0;
+          const double* s = &carried->springs[3 * std::size_t{old_payload_[a]}];
+          pairs.hx[k] = sign * s[0];
+          pairs.hy[k] = sign * s[1];
+          pairs.hz[k] = sign * s[2];
+          ++carried_contacts;
+          ++a;
+          ++b;
+        }
       }
     }
+    stats.carried_contacts += carried_contacts;
   }
   pairs.build_csr(n, threads, sort_);
   return stats;

@@ -88,8 +88,10 @@ struct CarriedSprings {
   }
 };
 std::uint64_t spring_key(std::uint32_t id_a, std::uint32_t id_b);
-// The springs of the list's touching pairs (a non-zero spring).
-void collect_springs(const Particles& particles, const PairList& pairs, CarriedSprings& out);
+// The springs of the list's touching pairs (a non-zero spring), in pair order, gathered on
+// `threads` threads.
+void collect_springs(const Particles& particles, const PairList& pairs, CarriedSprings& out,
+                     int threads = 1);
 
 // What the processes of a decomposed run agree on during a rebuild, so that each builds its
 // particles' list on the grid one process would use (the same cells, hence the same order and
