@@ -244,7 +244,9 @@ RebuildStats NeighborBuilder::rebuild(Particles& p, PairList& pairs, const Domai
 
   // 2. Wrap periodic positions, and add ghosts: images within reach of a periodic face.
   double max_r = 0.0;
-  for (double r : p.radius) max_r = std::max(max_r, r);
+  const double* const radius = p.radius.data();
+#pragma omp parallel for schedule(static) num_threads(threads) reduction(max : max_r)
+  for (std::size_t k = 0; k < n; ++k) max_r = std::max(max_r, radius[k]);
   if (ranks != nullptr) max_r = ranks->max_over_ranks(max_r);
   const double reach = 2.0 * max_r + skin;
   for (int a = 0; a < 3; ++a) {
@@ -256,6 +258,7 @@ RebuildStats NeighborBuilder::rebuild(Particles& p, PairList& pairs, const Domai
     }
     std::vector<double>& c = a == 0 ? p.x : a == 1 ? p.y : p.z;
     const double lo = domain.lo[a], len = domain.length(a);
+#pragma omp parallel for schedule(static) num_threads(threads)
     for (std::size_t k = 0; k < n; ++k) {
       const double wrapped = c[k] - len * std::floor((c[k] - lo) / len);
       c[k] = wrapped < domain.hi[a] ? wrapped : lo;
