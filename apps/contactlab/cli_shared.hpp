@@ -58,6 +58,8 @@ void add_emulate_dem_mpi_command(CLI::App& emulate_app, const std::string& comma
                                  std::function<int()>& run);
 // `dem partition`, under the dem command (dem_partition_command.cpp).
 Subcommand add_dem_partition_command(CLI::App& dem_app, const std::string& command_line);
+// `dem tile`, under the dem command (dem_tile_command.cpp).
+Subcommand add_dem_tile_command(CLI::App& dem_app);
 // `dem profile`, under the dem command (dem_profile_command.cpp).
 Subcommand add_dem_profile_command(CLI::App& dem_app, const std::string& command_line);
 

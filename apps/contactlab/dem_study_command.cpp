@@ -63,7 +63,8 @@ std::vector<Subcommand> add_dem_study_commands(CLI::App& dem_app, const std::str
       ->delimiter(',');
   return {{variants_app, [=] { return variants->run(); }},
           add_dem_profile_command(dem_app, command_line),
-          add_dem_partition_command(dem_app, command_line)};
+          add_dem_partition_command(dem_app, command_line),
+          add_dem_tile_command(dem_app)};
 }
 
 }  // namespace contactlab::cli

@@ -14,7 +14,7 @@ namespace {
 template <class T>
 void permute_one(std::vector<T>& v, std::vector<T>& scratch, std::span<const std::uint32_t> order,
                  int threads) {
-  scratch.resize(v.size());
+  scratch.resize(order.size());
   T* const out = scratch.data();
   const T* const in = v.data();
   const std::size_t n = order.size();
@@ -49,6 +49,10 @@ void Particles::add(std::uint32_t stable_id, std::uint16_t material_index, doubl
 }
 
 void Particles::permute(std::span<const std::uint32_t> order, int threads) {
+  gather(order, threads);
+}
+
+void Particles::gather(std::span<const std::uint32_t> order, int threads) {
   std::vector<std::uint32_t> scratch_u32;
   std::vector<std::uint16_t> scratch_u16;
   std::vector<double> scratch_f64;

@@ -35,6 +35,9 @@ struct Particles {
   // Every array permuted: new index a holds what index order[a] held (gathered on `threads`
   // threads; order.size() == size()).
   void permute(std::span<const std::uint32_t> order, int threads = 1);
+  // The same where `order` may leave out or repeat indices: the arrays take its length (copies
+  // of a column laid side by side, tile.hpp).
+  void gather(std::span<const std::uint32_t> order, int threads = 1);
 
   // Calls f on every per-particle array, in one fixed order (the checkpoint's): growth,
   // permutation and checkpoints all go through this one list.
