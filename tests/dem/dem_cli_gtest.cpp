@@ -106,7 +106,8 @@ TEST(DemCli, BadConfigIsOneLineAndNoOutput) {
 }
 
 // dem tile: the drop box's state laid 2 x 2 under a silo and cut to it is a checkpoint that silo
-// config restarts from; a target without a silo is one line, and nothing is written.
+// config restarts from (and dem profile counts its particles, not the config's); a target
+// without a silo is one line, and nothing is written.
 TEST(DemCli, TileLaysCopiesUnderASiloThatRunsOnFromThem) {
   TempDir dir;
   const std::string column_chk = dir.file("drop.chk");
@@ -131,9 +132,20 @@ TEST(DemCli, TileLaysCopiesUnderASiloThatRunsOnFromThem) {
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("4 copies of 'drop' at t = 0.004 s (864 particles)"), std::string::npos)
       << r.output;
+  const std::string kept_marker = "laid under 'drop': ";
+  const auto kept_at = r.output.find(kept_marker);
+  ASSERT_NE(kept_at, std::string::npos) << r.output;
+  const int kept = std::stoi(r.output.substr(kept_at + kept_marker.size()));
+  EXPECT_LT(kept, 864);
   r = run_command(contactlab_exe() + " dem run " + silo_path + " --restart " + out +
                   " --steps 100 --threads 2");
   EXPECT_EQ(r.exit_code, 0) << r.output;
+  // dem profile from it counts the checkpoint's particles, not the config's 900.
+  r = run_command(contactlab_exe() + " dem profile " + silo_path + " --restart " + out +
+                  " --steps 5 --threads 1");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("'drop': " + std::to_string(kept) + " particles"), std::string::npos)
+      << r.output;
   const std::string refused = dir.file("refused.chk");
   r = run_command(contactlab_exe() + " dem tile " + config_path() + " --restart " + column_chk +
                   " --into " + config_path() + " --copies 2,2 --checkpoint " + refused);
