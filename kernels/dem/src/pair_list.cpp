@@ -10,6 +10,7 @@
 #include <string>
 #include <utility>
 
+#include "contactlab/kernels/count_then_fill.hpp"
 #include "contactlab/kernels/error.hpp"
 #include "contactlab/kernels/variant.hpp"
 
@@ -46,40 +47,33 @@ std::uint64_t spring_key(std::uint32_t a, std::uint32_t b) {
 }
 
 void collect_springs(const Particles& p, const PairList& pairs, CarriedSprings& out, int threads) {
-  const std::size_t count = pairs.size();
   auto touching = [&](std::size_t k) {
     return pairs.hx[k] != 0.0 || pairs.hy[k] != 0.0 || pairs.hz[k] != 0.0;
   };
-  // In pair order: each thread counts its range's springs, then writes them after the ranges
-  // before it.
-  std::vector<std::size_t> range_start(static_cast<std::size_t>(threads) + 1, 0);
-#pragma omp parallel num_threads(threads)
-  {
-    const auto t = static_cast<std::size_t>(omp_get_thread_num());
-    const auto size = static_cast<std::size_t>(omp_get_num_threads());
-    const std::size_t first = count * t / size, last = count * (t + 1) / size;
-    std::size_t mine = 0;
-    for (std::size_t k = first; k < last; ++k) mine += touching(k);
-    range_start[t + 1] = mine;
-#pragma omp barrier
-#pragma omp single
-    {
-      for (std::size_t u = 0; u < size; ++u) range_start[u + 1] += range_start[u];
-      out.keys.resize(range_start[size]);
-      out.springs.resize(3 * range_start[size]);
-    }  // implicit barrier
-    std::size_t at = range_start[t];
-    for (std::size_t k = first; k < last; ++k) {
-      if (!touching(k)) continue;
-      const std::uint32_t a = p.id[pairs.i[k]], b = p.id[pairs.j[k]];
-      const double sign = a < b ? 1.0 : -1.0;  // seen from i: turned to the lower id's view
-      out.keys[at] = spring_key(a, b);
-      out.springs[3 * at] = sign * pairs.hx[k];
-      out.springs[3 * at + 1] = sign * pairs.hy[k];
-      out.springs[3 * at + 2] = sign * pairs.hz[k];
-      ++at;
-    }
-  }
+  // In pair order, whatever the team.
+  count_then_fill(
+      pairs.size(), threads,
+      [&](std::size_t first, std::size_t last) {
+        std::size_t mine = 0;
+        for (std::size_t k = first; k < last; ++k) mine += touching(k);
+        return mine;
+      },
+      [&](std::size_t total) {
+        out.keys.resize(total);
+        out.springs.resize(3 * total);
+      },
+      [&](std::size_t first, std::size_t last, std::size_t at) {
+        for (std::size_t k = first; k < last; ++k) {
+          if (!touching(k)) continue;
+          const std::uint32_t a = p.id[pairs.i[k]], b = p.id[pairs.j[k]];
+          const double sign = a < b ? 1.0 : -1.0;  // seen from i: turned to the lower id's view
+          out.keys[at] = spring_key(a, b);
+          out.springs[3 * at] = sign * pairs.hx[k];
+          out.springs[3 * at + 1] = sign * pairs.hy[k];
+          out.springs[3 * at + 2] = sign * pairs.hz[k];
+          ++at;
+        }
+      });
 }
 
 RebuildStats NeighborBuilder::rebuild(Particles& p, PairList& pairs, const Domain& domain,
@@ -156,10 +150,10 @@ RebuildStats NeighborBuilder::rebuild(Particles& p, PairList& pairs, const Domai
     scene_.z[r] = p.z[k];
     scene_.diameter[r] = 2.0 * p.radius[k];
   }
-  ghost_owner_.clear();
-  ghost_image_.clear();
+  // Row r's images within reach of a periodic face, in a fixed order (x, then y, then z
+  // choices): emit(r, image code, shift) for each.
   const bool any_periodic = domain.periodic[0] || domain.periodic[1] || domain.periodic[2];
-  for (std::size_t r = 0; any_periodic && r < n; ++r) {
+  auto each_ghost = [&](std::size_t r, auto&& emit) {
     const double pos[3] = {scene_.x[r], scene_.y[r], scene_.z[r]};
     int options[3][2];  // per axis: the images to try (0 = none)
     int counts[3];
@@ -176,17 +170,37 @@ RebuildStats NeighborBuilder::rebuild(Particles& p, PairList& pairs, const Domai
       for (int ay = 0; ay < counts[1]; ++ay) {
         for (int az = 0; az < counts[2]; ++az) {
           if (ax == 0 && ay == 0 && az == 0) continue;
-          const int ix = options[0][ax], iy = options[1][ay], iz = options[2][az];
-          scene_.x.push_back(pos[0] + ix * domain.length(0));
-          scene_.y.push_back(pos[1] + iy * domain.length(1));
-          scene_.z.push_back(pos[2] + iz * domain.length(2));
-          scene_.diameter.push_back(scene_.diameter[r]);
-          ghost_owner_.push_back(static_cast<std::uint32_t>(r));
-          ghost_image_.push_back(static_cast<std::uint8_t>((ix + 1) + 3 * (iy + 1) + 9 * (iz + 1)));
+          emit(options[0][ax], options[1][ay], options[2][az]);
         }
       }
     }
-  }
+  };
+  // The ghosts follow the rows: counted per range of rows, then written in row order.
+  count_then_fill(
+      any_periodic ? n : 0, threads,
+      [&](std::size_t first, std::size_t last) {
+        std::size_t mine = 0;
+        for (std::size_t r = first; r < last; ++r) each_ghost(r, [&](int, int, int) { ++mine; });
+        return mine;
+      },
+      [&](std::size_t total) {
+        for (auto* v : {&scene_.x, &scene_.y, &scene_.z, &scene_.diameter}) v->resize(n + total);
+        ghost_owner_.resize(total);
+        ghost_image_.resize(total);
+      },
+      [&](std::size_t first, std::size_t last, std::size_t at) {
+        for (std::size_t r = first; r < last; ++r) {
+          each_ghost(r, [&](int ix, int iy, int iz) {
+            scene_.x[n + at] = scene_.x[r] + ix * domain.length(0);
+            scene_.y[n + at] = scene_.y[r] + iy * domain.length(1);
+            scene_.z[n + at] = scene_.z[r] + iz * domain.length(2);
+            scene_.diameter[n + at] = scene_.diameter[r];
+            ghost_owner_[at] = static_cast<std::uint32_t>(r);
+            ghost_image_[at] = static_cast<std::uint8_t>((ix + 1) + 3 * (iy + 1) + 9 * (iz + 1));
+            ++at;
+          });
+        }
+      });
   stats.ghosts = ghost_owner_.size();
   Box box;
   for (int a = 0; a < 3; ++a) {
