@@ -191,12 +191,15 @@ TEST_F(DemTile, KeepsTheLowestWhenTheTargetHoldsFewer) {
   }
 }
 
-TEST_F(DemTile, RefusesAColumnThatIsNotPeriodicAndCopiesThatDoNotCoverTheSilo) {
+TEST_F(DemTile, RefusesAColumnNotPeriodicATargetPeriodicAndCopiesThatDoNotCoverTheSilo) {
   EXPECT_THROW(tile_column(*column_, *state_, silo(0.012, 600), {2, 3}), InputError);
   nlohmann::json closed = column_json();
   closed["domain"]["periodic"] = {true, false, false};
   const DemConfig not_periodic = parse_dem_config(closed);
   EXPECT_THROW(tile_column(not_periodic, *state_, silo(0.012, 600), {3, 3}), InputError);
+  DemConfig wrapping = silo(0.012, 600);
+  wrapping.settings.domain.periodic = {true, true, false};
+  EXPECT_THROW(tile_column(*column_, *state_, wrapping, {3, 3}), InputError);
   EXPECT_NEAR(3 * kSide, 0.0264, 1e-12);  // 3 copies cover the 24 mm diameter, 2 do not
 }
 

@@ -3,7 +3,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <numeric>
 #include <string>
 #include <vector>
 
@@ -38,6 +37,11 @@ TiledBed tile_column(const DemConfig& column, const CheckpointParts& column_stat
                      "' must be periodic along x and y and not along z");
   }
   if (copies[0] < 1 || copies[1] < 1) throw InputError("dem tile: copies must be >= 1 per axis");
+  // The copies' list is written without periodic images: a target that wraps would need them.
+  const Domain& into = target.settings.domain;
+  if (into.periodic[0] || into.periodic[1] || into.periodic[2]) {
+    throw InputError("dem tile: the target config '" + target.name + "' is periodic");
+  }
   const LatticeSpec& silo = cylinder_lattice(target);
   const double length[2] = {box.hi[0] - box.lo[0], box.hi[1] - box.lo[1]};
   // The copies' square, centred on the silo's axis, must cover its whole cross-section.
@@ -162,7 +166,7 @@ TiledBed tile_column(const DemConfig& column, const CheckpointParts& column_stat
       if (i == kNone || j == kNone) continue;
       pairs.i.push_back(i);
       pairs.j.push_back(j);
-      pairs.image.push_back(13);  // no shift: the target is not periodic here
+      pairs.image.push_back(13);  // no shift: the target is not periodic
       pairs.hx.push_back(list.hx[k]);
       pairs.hy.push_back(list.hy[k]);
       pairs.hz.push_back(list.hz[k]);

@@ -29,8 +29,9 @@ struct TileReport {
 // more particles are inside than the target's config holds, the lowest are kept. Ids are
 // 0, 1, ... from the lowest up; the time and step are the column's; the initial energy is the
 // kept particles' at their lattice sites (so the dissipated energy stays what they lost).
-// Throws InputError naming the problem (a column not periodic in x and y, a target without a
-// cylinder lattice, copies that do not cover the cylinder, a material the target lacks).
+// Throws InputError naming the problem (a column not periodic in x and y, a periodic target, a
+// target without a cylinder lattice, copies that do not cover the cylinder, a material the target
+// lacks).
 struct TiledBed {
   CheckpointParts parts;
   TileReport report;
