@@ -20,6 +20,11 @@ struct TileReport {
   double top_z = 0.0;            // the highest kept centre [m]
 };
 
+struct TiledBed {
+  CheckpointParts parts;
+  TileReport report;
+};
+
 // The column's state (`column_state`, a checkpoint of `column`: periodic along x and y, not z)
 // copied `copies[0]` x `copies[1]` times, the copies' square centred on the axis of the target's
 // first lattice that lies inside a cylinder, and cut to that cylinder: a particle is kept when
@@ -32,10 +37,6 @@ struct TileReport {
 // Throws InputError naming the problem (a column not periodic in x and y, a periodic target, a
 // target without a cylinder lattice, copies that do not cover the cylinder, a material the target
 // lacks).
-struct TiledBed {
-  CheckpointParts parts;
-  TileReport report;
-};
 TiledBed tile_column(const DemConfig& column, const CheckpointParts& column_state,
                      const DemConfig& target, std::array<int, 2> copies);
 
