@@ -105,56 +105,6 @@ TEST(DemCli, BadConfigIsOneLineAndNoOutput) {
   EXPECT_TRUE(fs::is_empty(out));
 }
 
-// dem tile: the drop box's state laid 2 x 2 under a silo and cut to it is a checkpoint that silo
-// config restarts from (and dem profile counts its particles, not the config's); a target
-// without a silo is one line, and nothing is written.
-TEST(DemCli, TileLaysCopiesUnderASiloThatRunsOnFromThem) {
-  TempDir dir;
-  const std::string column_chk = dir.file("drop.chk");
-  auto r = run_command(contactlab_exe() + " dem run " + config_path() +
-                       " --threads 1 --checkpoint " + column_chk);
-  ASSERT_EQ(r.exit_code, 0) << r.output;
-  std::string silo = slurp(config_path());
-  silo.replace(silo.find("\"domain\""), silo.find("\"gravity\"") - silo.find("\"domain\""),
-               "\"domain\": {\"lo\": [-0.016, -0.016, 0], \"hi\": [0.016, 0.016, 0.05]},\n  ");
-  silo.replace(silo.find("\"walls\": ["), 10,
-               "\"walls\": [{\"type\": \"cylinder\", \"name\": \"silo\", \"point\": [0, 0, 0], "
-               "\"axis\": [0, 0, 1], \"radius\": 0.015}, ");
-  silo.replace(silo.find("\"lo\": [0, 0, 0.001], \"hi\": [0.016, 0.016, 0.03]"), 47,
-               "\"lo\": [-0.015, -0.015, 0.001], \"hi\": [0.015, 0.015, 0.05], "
-               "\"inside_cylinder\": {\"point\": [0, 0, 0], \"radius\": 0.015}");
-  silo.replace(silo.find("\"count\": 216"), 12, "\"count\": 900");
-  const std::string silo_path = dir.file("silo.json");
-  std::ofstream(silo_path) << silo;
-  const std::string out = dir.file("silo.chk");
-  r = run_command(contactlab_exe() + " dem tile " + config_path() + " --restart " + column_chk +
-                  " --into " + silo_path + " --copies 2,2 --checkpoint " + out);
-  ASSERT_EQ(r.exit_code, 0) << r.output;
-  EXPECT_NE(r.output.find("4 copies of 'drop' at t = 0.004 s (864 particles)"), std::string::npos)
-      << r.output;
-  const std::string kept_marker = "laid under 'drop': ";
-  const auto kept_at = r.output.find(kept_marker);
-  ASSERT_NE(kept_at, std::string::npos) << r.output;
-  const int kept = std::stoi(r.output.substr(kept_at + kept_marker.size()));
-  EXPECT_LT(kept, 864);
-  r = run_command(contactlab_exe() + " dem run " + silo_path + " --restart " + out +
-                  " --steps 100 --threads 2");
-  EXPECT_EQ(r.exit_code, 0) << r.output;
-  // dem profile from it counts the checkpoint's particles, not the config's 900.
-  r = run_command(contactlab_exe() + " dem profile " + silo_path + " --restart " + out +
-                  " --steps 5 --threads 1");
-  EXPECT_EQ(r.exit_code, 0) << r.output;
-  EXPECT_NE(r.output.find("'drop': " + std::to_string(kept) + " particles"), std::string::npos)
-      << r.output;
-  const std::string refused = dir.file("refused.chk");
-  r = run_command(contactlab_exe() + " dem tile " + config_path() + " --restart " + column_chk +
-                  " --into " + config_path() + " --copies 2,2 --checkpoint " + refused);
-  EXPECT_EQ(r.exit_code, 2) << r.output;
-  EXPECT_NE(r.output.find("has no lattice inside a cylinder"), std::string::npos) << r.output;
-  EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << r.output;
-  EXPECT_FALSE(fs::exists(refused));
-}
-
 TEST(DemCli, HopperWritesDischargeSeriesAndStopsAfterSteps) {
   TempDir dir;
   const std::string config = tiny_hopper(dir);

@@ -1,9 +1,12 @@
 // dem tile: copies of a settled periodic column cut to a silo keep every contact and its spring,
-// only whole spheres inside the silo, the lowest when the target holds fewer, and run on.
+// only whole spheres inside the silo, the lowest when the target holds fewer, and run on; the
+// command writes a checkpoint the silo's config restarts from.
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <numbers>
@@ -15,6 +18,7 @@
 #include "contactlab/dem/engine.hpp"
 #include "contactlab/dem/tile.hpp"
 #include "contactlab/kernels/error.hpp"
+#include "program_test_support.hpp"
 
 namespace contactlab::dem {
 namespace {
@@ -191,7 +195,7 @@ TEST_F(DemTile, KeepsTheLowestWhenTheTargetHoldsFewer) {
   }
 }
 
-TEST_F(DemTile, RefusesAColumnNotPeriodicATargetPeriodicAndCopiesThatDoNotCoverTheSilo) {
+TEST_F(DemTile, RefusesWhatItCannotLayOrCut) {
   EXPECT_THROW(tile_column(*column_, *state_, silo(0.012, 600), {2, 3}), InputError);
   nlohmann::json closed = column_json();
   closed["domain"]["periodic"] = {true, false, false};
@@ -200,6 +204,9 @@ TEST_F(DemTile, RefusesAColumnNotPeriodicATargetPeriodicAndCopiesThatDoNotCoverT
   DemConfig wrapping = silo(0.012, 600);
   wrapping.settings.domain.periodic = {true, true, false};
   EXPECT_THROW(tile_column(*column_, *state_, wrapping, {3, 3}), InputError);
+  DemConfig no_silo = silo(0.012, 600);
+  no_silo.lattices[0].in_cylinder = false;
+  EXPECT_THROW(tile_column(*column_, *state_, no_silo, {3, 3}), InputError);
   EXPECT_NEAR(3 * kSide, 0.0264, 1e-12);  // 3 copies cover the 24 mm diameter, 2 do not
 }
 
@@ -243,6 +250,71 @@ TEST(DemTileConfigs, TheHopperLargeColumnIsTheSilosFillPerUnitOfFloor) {
         return w.name == "bottom" && w.kind == WallKind::kOrificePlate && w.point[2] == 0.0;
       }));
 }
+
+// `contactlab dem tile` end to end.
+namespace cli {
+
+namespace fs = std::filesystem;
+using test::contactlab_exe;
+using test::run_command;
+using test::slurp;
+using test::TempDir;
+
+std::string drop_box() {
+  return std::string(CONTACTLAB_SOURCE_DIR) + "/experiments/dem/drop-box.json";
+}
+
+// dem tile: the drop box's state laid 2 x 2 under a silo and cut to it is a checkpoint that silo
+// config restarts from (and dem profile counts its particles, not the config's); a target
+// that wraps (the drop box itself) is one line, and nothing is written.
+TEST(DemTileCli, LaysCopiesUnderASiloThatRunsOnFromThem) {
+  TempDir dir;
+  const std::string column_chk = dir.file("drop.chk");
+  auto r = run_command(contactlab_exe() + " dem run " + drop_box() + " --threads 1 --checkpoint " +
+                       column_chk);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  std::string silo = slurp(drop_box());
+  silo.replace(silo.find("\"domain\""), silo.find("\"gravity\"") - silo.find("\"domain\""),
+               "\"domain\": {\"lo\": [-0.016, -0.016, 0], \"hi\": [0.016, 0.016, 0.05]},\n  ");
+  silo.replace(silo.find("\"walls\": ["), 10,
+               "\"walls\": [{\"type\": \"cylinder\", \"name\": \"silo\", \"point\": [0, 0, 0], "
+               "\"axis\": [0, 0, 1], \"radius\": 0.015}, ");
+  silo.replace(silo.find("\"lo\": [0, 0, 0.001], \"hi\": [0.016, 0.016, 0.03]"), 47,
+               "\"lo\": [-0.015, -0.015, 0.001], \"hi\": [0.015, 0.015, 0.05], "
+               "\"inside_cylinder\": {\"point\": [0, 0, 0], \"radius\": 0.015}");
+  silo.replace(silo.find("\"count\": 216"), 12, "\"count\": 900");
+  const std::string silo_path = dir.file("silo.json");
+  std::ofstream(silo_path) << silo;
+  const std::string out = dir.file("silo.chk");
+  r = run_command(contactlab_exe() + " dem tile " + drop_box() + " --restart " + column_chk +
+                  " --into " + silo_path + " --copies 2,2 --checkpoint " + out);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("4 copies of 'drop' at t = 0.004 s (864 particles)"), std::string::npos)
+      << r.output;
+  const std::string kept_marker = "laid under 'drop': ";
+  const auto kept_at = r.output.find(kept_marker);
+  ASSERT_NE(kept_at, std::string::npos) << r.output;
+  const int kept = std::stoi(r.output.substr(kept_at + kept_marker.size()));
+  EXPECT_LT(kept, 864);
+  r = run_command(contactlab_exe() + " dem run " + silo_path + " --restart " + out +
+                  " --steps 100 --threads 2");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  // dem profile from it counts the checkpoint's particles, not the config's 900.
+  r = run_command(contactlab_exe() + " dem profile " + silo_path + " --restart " + out +
+                  " --steps 5 --threads 1");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("'drop': " + std::to_string(kept) + " particles"), std::string::npos)
+      << r.output;
+  const std::string refused = dir.file("refused.chk");
+  r = run_command(contactlab_exe() + " dem tile " + drop_box() + " --restart " + column_chk +
+                  " --into " + drop_box() + " --copies 2,2 --checkpoint " + refused);
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("the target config 'drop' is periodic"), std::string::npos) << r.output;
+  EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << r.output;
+  EXPECT_FALSE(fs::exists(refused));
+}
+
+}  // namespace cli
 
 }  // namespace
 }  // namespace contactlab::dem
