@@ -12,8 +12,8 @@ namespace {
 // into the last one's storage. Fresh arrays had zeroed and faulted in 38 arrays' pages on one
 // thread at every rebuild (on the 900,000-particle hopper, a quarter of a rebuild).
 template <class T>
-void permute_one(std::vector<T>& v, std::vector<T>& scratch, std::span<const std::uint32_t> order,
-                 int threads) {
+void gather_one(std::vector<T>& v, std::vector<T>& scratch, std::span<const std::uint32_t> order,
+                int threads) {
   scratch.resize(order.size());
   T* const out = scratch.data();
   const T* const in = v.data();
@@ -65,7 +65,7 @@ void Particles::gather(std::span<const std::uint32_t> order, int threads) {
     else
       return scratch_f64;
   };
-  for_each_array([&](auto& v) { permute_one(v, scratch_for(v), order, threads); });
+  for_each_array([&](auto& v) { gather_one(v, scratch_for(v), order, threads); });
 }
 
 }  // namespace contactlab::dem
