@@ -151,7 +151,7 @@ RebuildStats NeighborBuilder::rebuild(Particles& p, PairList& pairs, const Domai
     scene_.diameter[r] = 2.0 * p.radius[k];
   }
   // Row r's images within reach of a periodic face, in a fixed order (x, then y, then z
-  // choices): emit(r, image code, shift) for each.
+  // choices): emit(ix, iy, iz), the image's shift in box lengths, for each.
   const bool any_periodic = domain.periodic[0] || domain.periodic[1] || domain.periodic[2];
   auto each_ghost = [&](std::size_t r, auto&& emit) {
     const double pos[3] = {scene_.x[r], scene_.y[r], scene_.z[r]};
