@@ -31,7 +31,8 @@ struct EmulateThreadsCommand {
   std::string variants_ =
       "particle/unsorted/full/static,cell/unsorted/full/static,particle/sorted/full/static,"
       "cell/sorted/full/static,particle/sorted/full/static,200,particle/sorted/half/static,"
-      "cell/sorted/half/static,particle/sorted/half/static,200";
+      "cell/sorted/half/static,particle/sorted/half/static,200,particle/sorted/full/balanced,"
+      "particle/sorted/half/balanced";
   std::string threads_ = "1,2,4,8,16";
   std::string measured_;  // default: 1 .. the machine's cores
   std::string chunk_threads_ = "2,4,8,16";
@@ -429,8 +430,8 @@ Subcommand add_emulate_command(CLI::App& app, const std::string& command_line) {
   threads->scene_.add_to(*t, true);
   t->add_option(
       "--variants", threads->variants_,
-      "variants, comma-separated (default: the paper's five, the two half-stencil block loops and "
-      "particle/sorted/half/static,200)");
+      "variants, comma-separated (default: the paper's five, the two half-stencil block loops, "
+      "particle/sorted/half/static,200 and the sorted particle loop's balanced blocks)");
   t->add_option("--threads", threads->threads_, "thread counts to emulate (1,2,4,8,16)");
   t->add_option("--measured-threads", threads->measured_,
                 "thread counts timed here, from 1 (default 1 and the cores)");

@@ -22,8 +22,10 @@ int resolve_threads(int requested) { return requested > 0 ? requested : omp_get_
 bool writes_first_rows_in_place(const Variant& variant, int threads) {
   const bool rows_in_visiting_order =
       variant.loop == LoopKind::kParticle || variant.order != Order::kUnsorted;
-  const bool first_iterations = threads == 1 || (variant.schedule.kind == ScheduleKind::kStatic &&
-                                                 variant.schedule.chunk == 0);
+  // The block and the balanced schedule give thread 0 the first iterations.
+  const bool first_iterations =
+      threads == 1 || variant.schedule.kind == ScheduleKind::kBalanced ||
+      (variant.schedule.kind == ScheduleKind::kStatic && variant.schedule.chunk == 0);
   return variant.stencil == Stencil::kFull && rows_in_visiting_order && first_iterations;
 }
 
@@ -42,6 +44,7 @@ using pair_ops::WorkCountOp;
 omp_sched_t to_omp(ScheduleKind kind) {
   switch (kind) {
     case ScheduleKind::kStatic:
+    case ScheduleKind::kBalanced:  // not an omp for: the traversal cuts its own blocks
       return omp_sched_static;
     case ScheduleKind::kDynamic:
       return omp_sched_dynamic;
@@ -64,8 +67,11 @@ void ContactDetector::detect(const CellGrid& grid, const Layout& layout, const P
   const bool half = variant.stencil == Stencil::kHalf;
   // Tiles of sparse cells where the homes are tested in blocks (SimdContactTest).
   const std::uint32_t tile_homes = ContactOp<PairTest>::kBlockHomes > 1 ? simd::kBlockHomes : 0;
-  const traversal::Spec spec{grid,          registry_,      variant.loop, variant.stencil,
-                             options.homes, options.blocks, tile_homes};
+  const bool balanced = variant.schedule.kind == ScheduleKind::kBalanced && run.threads > 1;
+  if (balanced) balanced_blocks_.prepare(run.threads);
+  const traversal::Spec spec{
+      grid,          registry_,      variant.loop, variant.stencil,
+      options.homes, options.blocks, tile_homes,   balanced ? &balanced_blocks_ : nullptr};
 
   if (thread_out_.size() < static_cast<std::size_t>(threads)) thread_out_.resize(threads);
   found_count_.resize(n);
@@ -84,7 +90,8 @@ void ContactDetector::detect(const CellGrid& grid, const Layout& layout, const P
   contacts_.offsets.resize(std::size_t{n} + 1);
   range_sums_.assign(threads, 0);
   run.thread_busy_s.assign(threads, 0.0);
-  std::vector<std::uint64_t> thread_tests(threads, 0);
+  std::vector<std::uint64_t>& thread_tests = run.thread_tests;
+  thread_tests.assign(threads, 0);
   // Where thread 0's finds are the first rows as they stand, it writes them into the contact
   // list's storage: 110 MB not copied on the paper's scene at one thread. The storage is
   // reserved for the larger of the last run's entries (plus what its last homes may append: a
@@ -155,8 +162,10 @@ CellGrid ContactDetector::prepare(const Scene& scene, const DetectOptions& optio
                      number_text(options.diameter) + ")");
   }
   const Schedule& schedule = options.variant.schedule;
-  if (schedule.chunk < 0 || (schedule.kind != ScheduleKind::kStatic && schedule.chunk == 0)) {
-    throw InputError("schedule " + to_string(schedule) + ": chunk size must be >= 1");
+  if (!has_valid_chunk(schedule)) {
+    throw InputError("schedule " + to_string(schedule) +
+                     (schedule.kind == ScheduleKind::kBalanced ? ": balanced takes no chunk size"
+                                                               : ": chunk size must be >= 1"));
   }
   if (scene.size() >= UINT32_MAX) throw InputError("at most 2^32 - 2 particles are supported");
   if (!options.blocks.all() && options.blocks.index >= options.blocks.count) {

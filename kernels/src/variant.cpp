@@ -21,9 +21,10 @@ constexpr NameTable<Precision, 2> kPrecisions{
     {{Precision::kDouble, "double"}, {Precision::kFloat, "float"}}};
 constexpr NameTable<GridIndex, 3> kGridIndexes{
     {{GridIndex::kAuto, "auto"}, {GridIndex::kDense, "dense"}, {GridIndex::kHashed, "hashed"}}};
-constexpr NameTable<ScheduleKind, 3> kScheduleKinds{{{ScheduleKind::kStatic, "static"},
+constexpr NameTable<ScheduleKind, 4> kScheduleKinds{{{ScheduleKind::kStatic, "static"},
                                                      {ScheduleKind::kDynamic, "dynamic"},
-                                                     {ScheduleKind::kGuided, "guided"}}};
+                                                     {ScheduleKind::kGuided, "guided"},
+                                                     {ScheduleKind::kBalanced, "balanced"}}};
 
 template <class Enum, std::size_t N>
 std::string_view name_of(const NameTable<Enum, N>& table, Enum value) {
@@ -74,6 +75,19 @@ std::string to_string(const Schedule& schedule) {
   return text;
 }
 
+bool has_valid_chunk(const Schedule& schedule) {
+  switch (schedule.kind) {
+    case ScheduleKind::kStatic:
+      return schedule.chunk >= 0;
+    case ScheduleKind::kBalanced:
+      return schedule.chunk == 0;
+    case ScheduleKind::kDynamic:
+    case ScheduleKind::kGuided:
+      return schedule.chunk >= 1;
+  }
+  return false;
+}
+
 LoopKind parse_loop(std::string_view text) { return parse_name(kLoops, text, "loop"); }
 Order parse_order(std::string_view text) { return parse_name(kOrders, text, "order"); }
 Stencil parse_stencil(std::string_view text) { return parse_name(kStencils, text, "stencil"); }
@@ -100,11 +114,15 @@ Schedule parse_schedule(std::string_view text) {
       throw InputError("schedule '" + std::string(text) + "': chunk size '" + std::string(chunk) +
                        "' is not an integer");
     }
+    if (schedule.kind == ScheduleKind::kBalanced) {
+      throw InputError("schedule '" + std::string(text) +
+                       "': balanced takes no chunk size (one block of equal work per thread)");
+    }
     if (value <= 0 || value > 1'000'000'000) {
       throw InputError("schedule '" + std::string(text) + "': chunk size must be >= 1");
     }
     schedule.chunk = static_cast<int>(value);
-  } else if (schedule.kind != ScheduleKind::kStatic) {
+  } else if (schedule.kind != ScheduleKind::kStatic && schedule.kind != ScheduleKind::kBalanced) {
     schedule.chunk = 1;  // OpenMP's default chunk for dynamic and guided
   }
   return schedule;
@@ -153,8 +171,9 @@ const std::vector<VariantAxis>& variant_axes() {
        "full | half: 27 cells, or own + 13 forward cells (each pair tested once)", true,
        parse_into<&Variant::stencil, parse_stencil>, print_of<&Variant::stencil>},
       {"schedule", "OpenMP schedule of the parallel loop", names_of(kScheduleKinds),
-       "static | static,k | dynamic,k | guided,k: k >= 1; static = block partition", true,
-       parse_into<&Variant::schedule, parse_schedule>,
+       "static | static,k | dynamic,k | guided,k | balanced: k >= 1; static = block partition; "
+       "balanced = a block per thread of equal estimated work",
+       true, parse_into<&Variant::schedule, parse_schedule>,
        [](const Variant& v) { return to_string(v.schedule); }},
       {"precision", "arithmetic of the pair test", names_of(kPrecisions),
        "double | float: float is relative to the box corner (half the traffic, may misjudge "
@@ -290,7 +309,9 @@ VariantSpace all_variants(const std::vector<int>& chunks) {
   for (const auto& entry : kPrecisions) space.precisions.push_back(entry.first);
   space.grids = {GridIndex::kDense, GridIndex::kHashed};
   space.schedules.push_back({ScheduleKind::kStatic, 0});
+  space.schedules.push_back({ScheduleKind::kBalanced, 0});
   for (const auto& entry : kScheduleKinds) {
+    if (entry.first == ScheduleKind::kBalanced) continue;
     for (const int chunk : chunks) space.schedules.push_back({entry.first, chunk});
   }
   return space;

@@ -135,7 +135,7 @@ TEST_P(EveryVariantMatchesBruteForce, AllSchedulesAndThreadCounts) {
       EXPECT_EQ(d.run.grid_dims, grid.dims());
     }
   }
-  EXPECT_EQ(runs, 36);  // (10 dense + 2 hashed schedules) x 3 thread counts
+  EXPECT_EQ(runs, 39);  // (10 dense + balanced + 2 hashed schedules) x 3 thread counts
 }
 
 std::string param_name(const ::testing::TestParamInfo<Params>& info) {

@@ -4,6 +4,7 @@
 // thread count) and the buffers a detection keeps, which must not grow with the thread count.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <string>
 #include <vector>
 
@@ -51,7 +52,8 @@ std::vector<Variant> variants_under_test() {
   const std::vector<Schedule> schedules = {{ScheduleKind::kStatic, 0},
                                            {ScheduleKind::kStatic, 5},
                                            {ScheduleKind::kDynamic, 3},
-                                           {ScheduleKind::kGuided, 2}};
+                                           {ScheduleKind::kGuided, 2},
+                                           {ScheduleKind::kBalanced, 0}};
   for (const auto loop : {LoopKind::kParticle, LoopKind::kCell}) {
     for (const auto order : {Order::kUnsorted, Order::kSorted}) {
       for (const auto stencil : {Stencil::kHalf, Stencil::kFull}) {
@@ -79,6 +81,40 @@ TEST(DetectionThreads, EveryThreadCountMatchesTheBruteForce) {
         ASSERT_TRUE(same_contacts(d.contacts, c.expected));
         EXPECT_EQ(d.run.threads, threads);
       }
+    }
+  }
+}
+
+// The balanced schedule's point: on a centre-clustered scene the block schedule's threads get
+// very unequal shares of the pair tests, the balanced blocks nearly equal ones (counted, not
+// timed: the same on any machine). The worst thread's tests over the mean, at 16 threads.
+TEST(DetectionThreads, BalancedBlocksShareTheTestsOfAClusteredScene) {
+  SceneSpec spec;
+  spec.kind = SceneKind::kClustered;
+  spec.n = 100000;
+  spec.diameter = 0.01;
+  spec.seed = 3;
+  const Scene scene = generate_scene(spec);
+  auto worst_over_mean = [&](const Variant& variant) {
+    const Detected d = detect(scene, variant, spec.diameter, 16);
+    std::uint64_t worst = 0, sum = 0;
+    for (const std::uint64_t t : d.run.thread_tests) {
+      worst = std::max(worst, t);
+      sum += t;
+    }
+    EXPECT_EQ(sum, d.run.candidate_tests);
+    return static_cast<double>(worst) * 16.0 / static_cast<double>(sum);
+  };
+  for (const auto stencil : {Stencil::kFull, Stencil::kHalf}) {
+    for (const auto loop : {LoopKind::kParticle, LoopKind::kCell}) {
+      const Variant block{loop, Order::kSorted, stencil, {ScheduleKind::kStatic, 0}};
+      const Variant balanced{loop, Order::kSorted, stencil, {ScheduleKind::kBalanced, 0}};
+      SCOPED_TRACE(to_string(balanced));
+      const double block_worst = worst_over_mean(block);
+      const double balanced_worst = worst_over_mean(balanced);
+      EXPECT_GT(block_worst, 2.0);
+      // A cell is the cell loop's unit: the centre's cells of hundreds are coarse grains.
+      EXPECT_LT(balanced_worst, loop == LoopKind::kParticle ? 1.25 : 1.6);
     }
   }
 }

@@ -17,28 +17,28 @@ TEST(Variant, EnumerationCoversTheWholeSpace) {
   EXPECT_EQ(space.precisions, (std::vector<Precision>{Precision::kDouble, Precision::kFloat}));
   // Both indexes, explicitly (auto is one of them on every scene).
   EXPECT_EQ(space.grids, (std::vector<GridIndex>{GridIndex::kDense, GridIndex::kHashed}));
-  // static, then static,k dynamic,k guided,k for each k.
-  ASSERT_EQ(space.schedules.size(), 10u);
+  // static, balanced, then static,k dynamic,k guided,k for each k.
+  ASSERT_EQ(space.schedules.size(), 11u);
   EXPECT_EQ(space.schedules[0], (Schedule{ScheduleKind::kStatic, 0}));
   std::set<std::string> schedules;
   for (const auto& s : space.schedules) schedules.insert(to_string(s));
-  EXPECT_EQ(schedules, (std::set<std::string>{"static", "static,1", "static,7", "static,64",
-                                              "dynamic,1", "dynamic,7", "dynamic,64", "guided,1",
-                                              "guided,7", "guided,64"}));
+  EXPECT_EQ(schedules, (std::set<std::string>{"static", "balanced", "static,1", "static,7",
+                                              "static,64", "dynamic,1", "dynamic,7", "dynamic,64",
+                                              "guided,1", "guided,7", "guided,64"}));
   const auto variants = enumerate(space);
-  ASSERT_EQ(variants.size(), 2u * 3u * 2u * 10u * 2u * 2u);
+  ASSERT_EQ(variants.size(), 2u * 3u * 2u * 11u * 2u * 2u);
   std::set<std::string> names;
   for (const auto& v : variants) names.insert(to_string(v));
   EXPECT_EQ(names.size(), variants.size()) << "duplicates in the enumeration";
   EXPECT_TRUE(enumerate(VariantSpace{}).empty());
-  EXPECT_EQ(enumerate(all_variants({})).size(), 48u);  // only plain static
+  EXPECT_EQ(enumerate(all_variants({})).size(), 96u);  // only plain static and balanced
   // A space left at its default precision and grid enumerates double, auto variants only.
   VariantSpace doubles = space;
   doubles.precisions = VariantSpace{}.precisions;
   doubles.grids = VariantSpace{}.grids;
   EXPECT_EQ(doubles.precisions, std::vector<Precision>{Precision::kDouble});
   EXPECT_EQ(doubles.grids, std::vector<GridIndex>{GridIndex::kAuto});
-  EXPECT_EQ(enumerate(doubles).size(), 120u);
+  EXPECT_EQ(enumerate(doubles).size(), 132u);
 }
 
 TEST(Variant, RoundTripForEveryEnumeratedVariant) {
@@ -136,6 +136,12 @@ TEST(Variant, ScheduleDefaults) {
   EXPECT_EQ(parse_schedule("dynamic"), (Schedule{ScheduleKind::kDynamic, 1}));
   EXPECT_EQ(parse_schedule("guided"), (Schedule{ScheduleKind::kGuided, 1}));
   EXPECT_EQ(parse_schedule("static"), (Schedule{ScheduleKind::kStatic, 0}));
+  EXPECT_EQ(parse_schedule("balanced"), (Schedule{ScheduleKind::kBalanced, 0}));
+  EXPECT_EQ(to_string(Schedule{ScheduleKind::kBalanced, 0}), "balanced");
+  EXPECT_THROW(parse_schedule("balanced,64"), InputError);
+  EXPECT_FALSE(has_valid_chunk({ScheduleKind::kBalanced, 4}));
+  EXPECT_TRUE(has_valid_chunk({ScheduleKind::kStatic, 0}));
+  EXPECT_FALSE(has_valid_chunk({ScheduleKind::kDynamic, 0}));
   EXPECT_EQ(parse_schedule("static,1"), (Schedule{ScheduleKind::kStatic, 1}));
   EXPECT_EQ(parse_schedule("guided,1000000000"), (Schedule{ScheduleKind::kGuided, 1000000000}));
   EXPECT_EQ(parse_variant("particle/unsorted/half/dynamic").schedule,

@@ -50,7 +50,7 @@ struct ShareKey {
 };
 
 bool dealt_in_chunks(const Schedule& schedule) {
-  return schedule.kind != ScheduleKind::kGuided &&
+  return schedule.kind != ScheduleKind::kGuided && schedule.kind != ScheduleKind::kBalanced &&
          !(schedule.kind == ScheduleKind::kStatic && schedule.chunk == 0);
 }
 

@@ -85,6 +85,18 @@ TEST(Fig6Layout, GuidedHalvesWhatIsLeft) {
   EXPECT_EQ(thread_tests(fig6_layout(), 2, {ScheduleKind::kGuided, 4}), (Tests{59, 43}));
 }
 
+TEST(Fig6Layout, BalancedBlocksEqualTheTestsPlusTheHomesCost) {
+  // Weights: tests + kHomeTests (16) a home: 19 19 19 19 | 18 18 18 | 19 19 19 19 | 24 x 9,
+  // 422 in all. Thread 1 begins where the prefix first reaches 211: after iteration 11 (230).
+  const ScheduleOutcome outcome = simulate_schedule(fig6_layout(), 2, {ScheduleKind::kBalanced, 0},
+                                                    MachineCosts::tests_only(), true);
+  const std::vector<ChunkAssignment> expected = {{0, 12, 0}, {12, 20, 1}};
+  EXPECT_EQ(outcome.chunks, expected);
+  EXPECT_EQ(thread_tests(fig6_layout(), 2, {ScheduleKind::kBalanced, 0}), (Tests{38, 64}));
+  EXPECT_THROW(simulate_schedule(fig6_layout(), 2, {ScheduleKind::kBalanced, 8}),
+               std::invalid_argument);
+}
+
 TEST(StaticBlock, GivesTheFirstRemainderThreadsOneMore) {
   // 7 iterations on 3 threads: q = 2, r = 1: [0,3) [3,5) [5,7).
   const std::vector<std::uint32_t> work(7, 1);

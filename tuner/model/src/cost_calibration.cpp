@@ -175,7 +175,7 @@ CalibrationResult calibrate_costs(std::span<const TimedRun> runs, const MachineC
                                   " (need threads >= 1 and seconds > 0)");
     }
     const Schedule& s = run.schedule;
-    if (s.chunk < 0 || (s.kind != ScheduleKind::kStatic && s.chunk == 0)) {
+    if (!has_valid_chunk(s)) {
       throw std::invalid_argument("calibrate_costs: run " + std::to_string(i) + " has schedule " +
                                   std::string(to_string(s.kind)) + "," + std::to_string(s.chunk));
     }
@@ -198,7 +198,8 @@ CalibrationResult calibrate_costs(std::span<const TimedRun> runs, const MachineC
   // What each thread does depends on the costs only where threads race for chunks (dynamic or
   // guided with more than one thread); the other runs are simulated once.
   auto races = [](const TimedRun& run) {
-    return run.threads > 1 && run.schedule.kind != ScheduleKind::kStatic;
+    return run.threads > 1 && run.schedule.kind != ScheduleKind::kStatic &&
+           run.schedule.kind != ScheduleKind::kBalanced;
   };
   // Runs of one loop share its prefix sums.
   std::vector<std::unique_ptr<PreparedWork>> prepared_works;

@@ -7,6 +7,8 @@
 #include <string>
 #include <tuple>
 
+#include "contactlab/kernels/balanced_blocks.hpp"
+
 namespace contactlab::tuner {
 
 namespace {
@@ -25,9 +27,10 @@ void check_threads(const char* function, int threads) {
 }
 
 void check_schedule(const char* function, const Schedule& schedule) {
-  if (schedule.chunk < 0 || (schedule.kind != ScheduleKind::kStatic && schedule.chunk == 0)) {
+  if (!has_valid_chunk(schedule)) {
     throw std::invalid_argument(std::string(function) + ": schedule " + schedule_text(schedule) +
-                                ": chunk must be >= 1 (or 0 = block with static)");
+                                ": chunk must be >= 1 (or 0 = block with static, always 0 with "
+                                "balanced)");
   }
 }
 
@@ -54,6 +57,11 @@ class ShareBuilder {
   }
 
   std::uint64_t iterations() const { return work_.iterations(); }
+
+  // Time `thread` spends before its first chunk (the balanced schedule's weighing).
+  void add_seconds(int thread, double seconds) {
+    outcome_.threads[static_cast<std::size_t>(thread)].seconds += seconds;
+  }
 
   // Gives [begin, end) to `thread`; returns the chunk's seconds.
   double assign(int thread, std::uint64_t begin, std::uint64_t end) {
@@ -154,6 +162,47 @@ ScheduleOutcome simulate_static(const PreparedWork& work, int threads, int chunk
   return builder.finish();
 }
 
+// Blocks of equal tests plus kHomeTests per home (schedule_model.hpp, "balanced"), after the
+// weighing.
+ScheduleOutcome simulate_balanced(const PreparedWork& work, int threads, const MachineCosts& costs,
+                                  bool record_chunks) {
+  ShareBuilder builder(work, threads, costs, false, record_chunks);
+  const std::uint64_t m = work.iterations();
+  const auto p = static_cast<std::uint64_t>(threads);
+  auto prefix = [&](std::uint64_t k) { return work.tests(0, k) + kHomeTests * work.homes(0, k); };
+  const std::uint64_t total = prefix(m);
+  // Before the loop each thread weighs an equal slice: a pass over its iterations with a
+  // stencil build per cell, priced as the loop's own iterations and builds.
+  for (std::uint64_t t = 0; t < p; ++t) {
+    const std::uint64_t first = m * t / p, last = m * (t + 1) / p;
+    builder.add_seconds(
+        static_cast<int>(t),
+        static_cast<double>(last - first) * costs.seconds_per_iteration +
+            static_cast<double>(work.builds(first, last)) * costs.seconds_per_build);
+  }
+  std::uint64_t begin = 0;
+  for (std::uint64_t t = 0; t < p; ++t) {
+    std::uint64_t end = m;
+    if (t + 1 < p) {
+      // The first k whose prefix reaches the target (the detector's BalancedBlocks bounds).
+      const std::uint64_t target = total / p * (t + 1) + total % p * (t + 1) / p;
+      std::uint64_t lo = begin, hi = m;
+      while (lo < hi) {
+        const std::uint64_t mid = lo + (hi - lo) / 2;
+        if (prefix(mid) >= target) {
+          hi = mid;
+        } else {
+          lo = mid + 1;
+        }
+      }
+      end = lo;
+    }
+    if (begin < end) builder.assign(static_cast<int>(t), begin, end);
+    begin = end;
+  }
+  return builder.finish();
+}
+
 // Greedy self-scheduling: the next chunk goes to the thread whose clock is lowest (ties: fewer
 // chunks taken, then lowest id). next_size(remaining) gives the next chunk's size.
 template <class NextSize>
@@ -247,6 +296,8 @@ ScheduleOutcome simulate_schedule(const PreparedWork& work, int threads, const S
   switch (schedule.kind) {
     case ScheduleKind::kStatic:
       return simulate_static(work, threads, schedule.chunk, costs, record_chunks);
+    case ScheduleKind::kBalanced:
+      return simulate_balanced(work, threads, costs, record_chunks);
     case ScheduleKind::kDynamic:
       return simulate_self_scheduled(
           work, threads, [chunk](std::uint64_t) { return chunk; }, costs, record_chunks);

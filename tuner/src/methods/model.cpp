@@ -23,12 +23,14 @@ std::pair<Variant, double> best_schedule(MeasuredKernel& kernel, const Variant& 
                                          WorkView work, int threads, const MachineCosts& costs,
                                          const std::vector<int>& grid, double output_s) {
   const PreparedWork prepared(work);
-  const std::array kinds{ScheduleKind::kStatic, ScheduleKind::kDynamic, ScheduleKind::kGuided};
+  const std::array kinds{ScheduleKind::kStatic, ScheduleKind::kDynamic, ScheduleKind::kGuided,
+                         ScheduleKind::kBalanced};
   std::vector<std::vector<int>> chunks;
   std::vector<double> seconds;
   const std::vector<int> balanced = chunk_grid_of(kernel, grid, work.tests.size(), threads);
   for (const auto kind : kinds) {
-    std::vector<int> candidates = balanced;
+    // Balanced has its blocks and no chunk; static has the block besides its chunks.
+    std::vector<int> candidates = kind == ScheduleKind::kBalanced ? std::vector<int>{0} : balanced;
     if (kind == ScheduleKind::kStatic) candidates.insert(candidates.begin(), 0);  // block
     for (const CandidatePrediction& c :
          predict_best_chunk(prepared, threads, kind, costs, candidates).candidates) {

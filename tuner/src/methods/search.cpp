@@ -49,7 +49,11 @@ class SearchMethod final : public TuningMethod {
 
     // Noise-aware search over k for the best structure and its modelled schedule kind.
     const PricedStructure& tuned = *state.tuned;
-    const ScheduleKind kind = tuned.model_choice.schedule.kind;
+    // Balanced has no chunk to search: its rival is the dynamic schedule's best chunk, and the
+    // two are paired below as the block and its kind's best chunk are.
+    const ScheduleKind model_kind = tuned.model_choice.schedule.kind;
+    const ScheduleKind kind =
+        model_kind == ScheduleKind::kBalanced ? ScheduleKind::kDynamic : model_kind;
     state.tuned_kind = kind;
     auto measure_chunk = [&](int chunk) {
       return kernel.samples(with_schedule(tuned.variant, kind, chunk), threads,
@@ -70,12 +74,12 @@ class SearchMethod final : public TuningMethod {
     const ChunkSearchResult searched = search_chunk(measure_chunk, search_options);
     Variant chosen = with_schedule(tuned.variant, kind, searched.chosen_chunk);
     // The model's block schedule (static without a chunk size, where thread 0 writes its rows in
-    // place) is not on the chunk grid, so the search cannot reach it: paired rounds against the
-    // searched chunk decide, each round in alternating order. Without this the search's choice,
-    // the one --variant auto uses, ran 10 - 13 % slower than its seed on the paper and blob
-    // scenes (results/amd-epyc-2c, 2026-12-03).
+    // place) and its balanced blocks are not on the chunk grid, so the search cannot reach them:
+    // paired rounds against the searched chunk decide, each round in alternating order. Without
+    // this the search's choice, the one --variant auto uses, ran 10 - 13 % slower than its seed
+    // on the paper and blob scenes (results/amd-epyc-2c, 2026-12-03).
     int block_runs = 0;
-    if (kind == ScheduleKind::kStatic && model_chunk == 0) {
+    if (model_chunk == 0) {
       std::vector<double> block_s, chunk_s;
       for (int round = 0; round < 2 * options.search_samples; ++round) {
         const bool block_first = round % 2 == 0;

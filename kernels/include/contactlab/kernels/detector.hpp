@@ -15,6 +15,7 @@
 #include <span>
 #include <vector>
 
+#include "contactlab/kernels/balanced_blocks.hpp"
 #include "contactlab/kernels/cell_grid.hpp"
 #include "contactlab/kernels/contact_list.hpp"
 #include "contactlab/kernels/large_vector.hpp"
@@ -139,6 +140,7 @@ struct DetectRun {
   // Pair tests made (each pair twice with the full stencil): the stencil's candidates, and with
   // tiles those of the tiles' longer rows too.
   std::uint64_t candidate_tests = 0;
+  std::vector<std::uint64_t> thread_tests;  // each thread's share of them: the loop's balance
   bool tiled = false;  // sparse cells shared their ranges as tiles (traverse.hpp: find_tile)
   std::uint64_t contact_pairs = 0;
   std::uint32_t max_cell_occupancy = 0;
@@ -229,6 +231,7 @@ class ContactDetector {
   void copy_row_blocks(int tid, int threads);
 
   std::vector<std::uint64_t> range_sums_;  // assemble_rows: each thread's rows, summed
+  BalancedBlocks balanced_blocks_;         // the balanced schedule's blocks (traverse.hpp)
   CellRegistry registry_;
   SortedCoordinates sorted_;  // coordinates in slot order, for the sorted orders
   LargeVector<float> narrow_x_, narrow_y_, narrow_z_, narrow_d_;  // single-precision copies

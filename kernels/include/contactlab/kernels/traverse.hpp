@@ -25,6 +25,7 @@
 #include <cstdint>
 #include <type_traits>
 
+#include "contactlab/kernels/balanced_blocks.hpp"
 #include "contactlab/kernels/cell_grid.hpp"
 #include "contactlab/kernels/cell_index.hpp"
 #include "contactlab/kernels/detector.hpp"
@@ -212,6 +213,9 @@ struct Spec {
   // many particles together are one tile (find_tile), whose homes share one range build with
   // rows a cell longer per cell joined, and are visited as one block (0: each cell alone).
   std::uint32_t tile_homes = 0;
+  // The balanced schedule: each thread visits the block of equal estimated work this gives it
+  // (weight_of_home), not the omp for's share; null for the OpenMP schedules.
+  BalancedBlocks* balanced = nullptr;
 };
 
 // Whether the traversal of `spec` makes tiles: the particle loop (cells visited in slot order)
@@ -358,10 +362,9 @@ void traverse_with(const Spec& spec, const Index& index, const Layout& layout, O
       SlotRange cached_cell{0, 0};
       // Only this process's iterations enter the loop, so its threads' schedule divides them.
       const std::uint64_t iterations = spec.blocks.size(n);
-#pragma omp for schedule(runtime) nowait
-      for (std::uint64_t k = 0; k < iterations; ++k) {
+      auto visit_particle = [&](std::uint64_t k) [[gnu::always_inline]] {
         const auto h = static_cast<std::uint32_t>(iteration_at(k));
-        if (!all_owned && !spec.homes.contains(layout.input_of(h))) continue;
+        if (!all_owned && !spec.homes.contains(layout.input_of(h))) return;
         const std::uint32_t s_h = layout.slot_of(h);
         bool built = false;
         if (s_h < cached_cell.begin || s_h >= cached_cell.end) {
@@ -388,16 +391,35 @@ void traverse_with(const Spec& spec, const Index& index, const Layout& layout, O
           }
         }
         visit(h, s_h, h, built);
+      };
+      if (spec.balanced) {
+        // A home weighs its pair tests (its cell's stencil, built once per cell as the loop
+        // does) plus kHomeTests.
+        NeighbourRanges weighing;
+        SlotRange weighed{0, 0};  // the cell `weighing` was built for
+        const IterationBlock mine = spec.balanced->block(iterations, [&](std::uint64_t k) {
+          const auto h = static_cast<std::uint32_t>(iteration_at(k));
+          const std::uint32_t s_h = layout.slot_of(h);
+          if (s_h < weighed.begin || s_h >= weighed.end) {
+            const auto home = grid.coords_of(layout.cell_x[h], layout.cell_y[h], layout.cell_z[h]);
+            weighed = index.cell_slots(index.key(grid, home[0], home[1], home[2]));
+            weighing.build(grid, index, stencil, home);
+          }
+          return weighing.tests_from(s_h, kHalf) + kHomeTests;
+        });
+        for (std::uint64_t k = mine.begin; k < mine.end; ++k) visit_particle(k);
+      } else {
+#pragma omp for schedule(runtime) nowait
+        for (std::uint64_t k = 0; k < iterations; ++k) visit_particle(k);
       }
       flush();
     } else {
       // One iteration per cell key (dense index) or per occupied cell (hashed index).
       const std::uint64_t iterations = spec.blocks.size(index.cell_iterations());
-#pragma omp for schedule(runtime) nowait
-      for (std::uint64_t k = 0; k < iterations; ++k) {
+      auto visit_cell = [&](std::uint64_t k) [[gnu::always_inline]] {
         const std::uint64_t cell = iteration_at(k);
         const SlotRange slots = index.iteration_slots(cell);
-        if (slots.begin == slots.end) continue;
+        if (slots.begin == slots.end) return;
         const std::uint32_t first = layout.particle_at(slots.begin);
         flush();
         nb.build(grid, index, stencil,
@@ -410,6 +432,28 @@ void traverse_with(const Spec& spec, const Index& index, const Layout& layout, O
           visit(h, s, cell, built);
           built = false;
         }
+      };
+      if (spec.balanced) {
+        // A cell weighs its homes' pair tests plus kHomeTests each; an empty one (a key of
+        // the dense index) 1.
+        NeighbourRanges weighing;
+        const IterationBlock mine = spec.balanced->block(iterations, [&](std::uint64_t k) {
+          const SlotRange slots = index.iteration_slots(iteration_at(k));
+          const std::uint64_t homes = slots.end - slots.begin;
+          if (homes == 0) return std::uint64_t{1};
+          const std::uint32_t first = layout.particle_at(slots.begin);
+          weighing.build(
+              grid, index, stencil,
+              grid.coords_of(layout.cell_x[first], layout.cell_y[first], layout.cell_z[first]));
+          // Full: every candidate but itself; half: the own cell's later homes, 0 .. homes - 1.
+          const std::uint64_t tests = kHalf ? homes * weighing.candidates - homes * (homes + 1) / 2
+                                            : homes * (weighing.candidates - 1);
+          return 1 + tests + homes * kHomeTests;
+        });
+        for (std::uint64_t k = mine.begin; k < mine.end; ++k) visit_cell(k);
+      } else {
+#pragma omp for schedule(runtime) nowait
+        for (std::uint64_t k = 0; k < iterations; ++k) visit_cell(k);
       }
       flush();
     }

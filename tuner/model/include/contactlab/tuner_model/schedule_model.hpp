@@ -146,7 +146,11 @@ class PreparedWork {
 //   q = M / P, r = M % P, the first r threads one more (gomp_iter_static_next, chunk_size 0);
 // - static,k: chunk c = [c*k, (c+1)*k) goes to thread c % P (gomp_iter_static_next);
 // - dynamic,k: chunks of k in loop order, each to the thread that becomes free first;
-// - guided,k: as dynamic, chunk sizes from self_scheduling_chunk_sizes().
+// - guided,k: as dynamic, chunk sizes from self_scheduling_chunk_sizes();
+// - balanced: one block per thread, block t starting where the prefix of tests plus
+//   kHomeTests (balanced_blocks.hpp) per home reaches t / P of the whole (the detector weighs
+//   a home by its cell's stencil, without the tiles' extra candidates), each thread first
+//   weighing an equal slice (its iterations and a build per cell, at the loop's costs).
 // The self-scheduled kinds are simulated on the cost model's clock; equal free times go to the
 // thread that has taken fewer chunks, then the lowest id (so with tests_only() costs every
 // thread still starts with one chunk, as in a real run, even when chunks have no work).
