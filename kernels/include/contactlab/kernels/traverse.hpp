@@ -213,8 +213,8 @@ struct Spec {
   // many particles together are one tile (find_tile), whose homes share one range build with
   // rows a cell longer per cell joined, and are visited as one block (0: each cell alone).
   std::uint32_t tile_homes = 0;
-  // The balanced schedule: each thread visits the block of equal estimated work this gives it
-  // (weight_of_home), not the omp for's share; null for the OpenMP schedules.
+  // The balanced schedule: each thread visits the block of equal pair tests (plus kHomeTests a
+  // home) this gives it, not the omp for's share; null for the OpenMP schedules.
   BalancedBlocks* balanced = nullptr;
 };
 
