@@ -1,6 +1,7 @@
 // contactlab tune end to end: the tuner reports every method honestly, --variant auto caches,
 // --threads 0 means the same in tune and detect, --json's folders are made.
 #include <gtest/gtest.h>
+#include <omp.h>
 
 #include <algorithm>
 #include <filesystem>
@@ -127,6 +128,46 @@ TEST(TuneCli, ThreadsZeroFollowsOmpNumThreadsInTuneAndVariantAuto) {
       << "--variant auto missed the choice tune stored:\n"
       << detected.output;
   EXPECT_EQ(detected.output.find("no cached choice"), std::string::npos) << detected.output;
+}
+
+// Planning for a larger machine (`--threads 16 --predict-only` on a 2-core one) calibrates on the
+// cores this machine has: timed oversubscribed, the threads took turns and the model priced 16
+// threads slower than 8. A cached calibration timed on more threads than the cores (one written
+// before this rule) is not used; the new one is, on the next run.
+TEST(TuneCli, PlanningForMoreThreadsThanCoresCalibratesOnTheCores) {
+  const int cores = omp_get_num_procs();
+  const int planned = cores + 14;
+  const std::string cache_dir = cache_without_choices("planned_cache");
+  {
+    json cache = json::parse(std::ifstream(cache_dir + "/tuning.json"));
+    for (auto& [key, calibration] : cache["calibrations"].items()) calibration["threads"] = planned;
+    std::ofstream(cache_dir + "/tuning.json") << cache.dump();
+  }
+  const std::string dir = temp_dir("tune_planned");
+  const std::string tune = "CONTACTLAB_CACHE_DIR=" + cache_dir + " " + contactlab_exe() +
+                           " tune --scene clustered --n 200000 -D 0.01 --threads " +
+                           std::to_string(planned) + " --predict-only --json " + dir + "/t.json";
+  const auto first = run_command(tune);
+  ASSERT_EQ(first.exit_code, 0) << first.output;
+  EXPECT_NE(first.output.find("calibrating"), std::string::npos)
+      << "an oversubscribed calibration was used:\n"
+      << first.output;
+  const json cache = json::parse(std::ifstream(cache_dir + "/tuning.json"));
+  // (Other builds' calibrations in a reused build folder's cache keep the planned count.)
+  int on_the_cores = 0;
+  for (const auto& [key, calibration] : cache["calibrations"].items())
+    on_the_cores += calibration["threads"] == cores ? 1 : 0;
+  EXPECT_EQ(on_the_cores, 1) << cache["calibrations"].dump();
+  // With the calibration of this machine's cores, more threads are predicted faster, not slower.
+  const json t = json::parse(std::ifstream(dir + "/t.json"));
+  double previous = 0.0;
+  for (const auto& p : t["predictions"]) {
+    if (previous > 0.0) EXPECT_LT(p["predicted_s"].get<double>(), previous) << p.dump();
+    previous = p["predicted_s"].get<double>();
+  }
+  const auto second = run_command(tune);
+  ASSERT_EQ(second.exit_code, 0) << second.output;
+  EXPECT_EQ(second.output.find("calibrating"), std::string::npos) << second.output;
 }
 
 // --json in folders that do not exist yet: made (as mkdir -p); under a file, one line before
