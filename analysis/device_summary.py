@@ -3,6 +3,7 @@
 
   analysis/device_summary.py RESULTS_DIR [--out RESULTS_DIR/summary.md]
                              [--emulation OTHER_MACHINE/emulation-threads.json ...]
+                             [--tune OTHER_MACHINE/tune.json ...]
 
 Reads, where present: detection-16-sorted.json and detection-16-paper.json (sweeps at 1-16
 threads), chunk-study-16.json, large-scenes/*.json (detect at 1 and 16 threads on larger scenes)
@@ -11,7 +12,10 @@ tables (median T_ALL over all samples; the phases T_s, the slowest thread's loop
 after it), the chunk study's best per stencil and schedule kind, and the larger scenes' time and
 memory per particle. Every number is measured, except in the table of each --emulation file:
 the speed-ups another machine emulated for these thread counts (emulate threads), beside the
-ones measured here at the same variant, with the emulation's error.
+ones measured here at the same variant, with the emulation's error; and in the table of each
+--tune file (`tune --threads 16 --predict-only` on another machine): the variant its model
+predicted fastest for this many threads, and each structure's best, beside the T_ALL measured
+here for that variant, the fastest measured here, and the regret that choice would have had.
 """
 import argparse
 import glob
@@ -171,11 +175,86 @@ def bandwidth_lines(doc, measured):
     return lines
 
 
+def round_slowdowns(path, threads):
+    """Each variant's median over the rounds of (its median T_ALL in the round / the round's
+    fastest variant's): ratios within one interleaved run, as the tuner's verification takes
+    them, since this VM-class machine moves by 2x between minutes."""
+    with open(path) as f:
+        doc = json.load(f)
+    per_round = {}
+    for run in doc["runs"]:
+        p, s = run["parameters"], run["samples"]
+        if run["status"] != "ok" or p["threads"] != threads:
+            continue
+        rounds = s.get("round") or [0] * len(s["total_s"])
+        by = {}
+        for r, t in zip(rounds, s["total_s"]):
+            by.setdefault(r, []).append(t)
+        per_round[p["variant"]] = {r: statistics.median(v) for r, v in by.items()}
+    common = set.intersection(*(set(v) for v in per_round.values())) if per_round else set()
+    fastest = {r: min(v[r] for v in per_round.values()) for r in common}
+    return {variant: statistics.median(v[r] / fastest[r] for r in common)
+            for variant, v in per_round.items()} if common else {}
+
+
+def tune_lines(path, folder):
+    """The model's choice for many threads, predicted on another machine, against the chunk
+    study measured here (one interleaved run)."""
+    with open(path) as f:
+        doc = json.load(f)
+    threads = doc["threads"]
+    model = next(m for m in doc["methods"] if m["method"] == "model")
+    study = os.path.join(folder, "chunk-study-16.json")
+    slowdown = round_slowdowns(study, threads) if os.path.exists(study) else {}
+    name = os.path.basename(path)
+    if not slowdown:
+        return [f"### The tuner's prediction `{name}`: no chunk study measured here at "
+                f"{threads} threads", ""]
+    best = min(slowdown.values())
+    best_v = min(slowdown, key=slowdown.get)
+    commit = doc["context"]["build"].get("git_commit", "unknown")[:7]
+    lines = [f"### The tuner's {threads}-thread choice, predicted elsewhere, against the chunk "
+             f"study measured here: `{name}` (predicted at {commit})", "",
+             f"The model (calibrated on that machine's cores, no timed run on this scene) priced "
+             f"every structure's schedules for {threads} threads. Regret, within the chunk "
+             f"study's interleaved rounds: the variant's median slowdown (its T_ALL over the "
+             f"round's fastest) over the fastest's (`{best_v}`) - 1. A chunk the study did not "
+             f"measure is shown by the study's chunks of the same structure and kind around it.",
+             "", "| | variant | predicted T_c [s] | regret measured here |", "|---|---|---|---|"]
+
+    def chunk_of(variant):
+        sched = variant.rpartition("/")[2]
+        return sched.partition(",")[0], int(sched.partition(",")[2] or 0)
+
+    def row(label, variant, predicted):
+        cell = f"| {label} | `{variant}` | *{predicted:.4f}*† | "
+        if variant in slowdown:
+            return cell + f"{slowdown[variant] / best - 1:+.0%} |"
+        head = variant.rpartition("/")[0]
+        kind, chunk = chunk_of(variant)
+        around = sorted((abs(chunk_of(v)[1] - chunk), v) for v in slowdown
+                        if v.rpartition("/")[0] == head and chunk_of(v)[0] == kind and chunk_of(v)[1])
+        if not chunk or not around:
+            return cell + "not measured here |"
+        near = sorted((v for _, v in around[:2]), key=lambda v: chunk_of(v)[1])
+        return cell + "not measured; " + ", ".join(
+            f"`{v.rpartition('/')[2]}` {slowdown[v] / best - 1:+.0%}" for v in near) + " |"
+
+    lines.append(row("model's choice", model["variant"], model["predicted_s"]))
+    for structure in model.get("structures", []):
+        lines.append(row("a structure's best", structure["variant"], structure["predicted_s"]))
+    lines += ["", "† predicted by the model on another machine (T_c: the loop and the output), "
+              "not measured. The regrets are of the code the chunk study ran (its commit in "
+              "the README)."]
+    return lines
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("folder")
     parser.add_argument("--out")
     parser.add_argument("--emulation", action="append", default=[])
+    parser.add_argument("--tune", action="append", default=[])
     args = parser.parse_args()
     out = args.out or os.path.join(args.folder, "summary.md")
     lines = [f"# Detection on {os.path.basename(os.path.normpath(args.folder))}: measured", "",
@@ -207,6 +286,8 @@ def main():
     if os.path.exists(chunk):
         found = True
         lines += chunk_lines(runs_of(chunk)[1]) + [""]
+    for tune in args.tune:
+        lines += tune_lines(tune, args.folder) + [""]
     large = large_lines(args.folder)
     lines += large + ([""] if large else [])
     if not found and not large:
