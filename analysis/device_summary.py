@@ -232,11 +232,13 @@ def tune_lines(path, folder):
             return cell + f"{slowdown[variant] / best - 1:+.0%} |"
         head = variant.rpartition("/")[0]
         kind, chunk = chunk_of(variant)
-        around = sorted((abs(chunk_of(v)[1] - chunk), v) for v in slowdown
-                        if v.rpartition("/")[0] == head and chunk_of(v)[0] == kind and chunk_of(v)[1])
-        if not chunk or not around:
+        same = sorted((chunk_of(v)[1], v) for v in slowdown
+                      if v.rpartition("/")[0] == head and chunk_of(v)[0] == kind and chunk_of(v)[1])
+        below = [v for c, v in same if c < chunk][-1:]
+        above = [v for c, v in same if c > chunk][:1]
+        near = below + above
+        if not chunk or not near:
             return cell + "not measured here |"
-        near = sorted((v for _, v in around[:2]), key=lambda v: chunk_of(v)[1])
         return cell + "not measured; " + ", ".join(
             f"`{v.rpartition('/')[2]}` {slowdown[v] / best - 1:+.0%}" for v in near) + " |"
 
