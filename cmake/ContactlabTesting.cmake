@@ -76,6 +76,14 @@ if(MPIEXEC_EXECUTABLE)
   endif()
 endif()
 
+# Each test's mpiexec keeps its session directory under a base of its own: two mpiexecs started
+# together under `ctest -j2` race to make Open MPI's shared /tmp/ompi.HOST.UID, and the loser
+# stops ("A call to mkdir was unable to create the desired directory ... File exists"; seen
+# once, 2026-12-05). The base sits right under /tmp, whose existence no one races for, and is
+# short: PMIx's sockets and shared segments live below it, and a socket path ends at 108 bytes.
+string(MD5 _cl_build_hash "${PROJECT_BINARY_DIR}")
+string(SUBSTRING "${_cl_build_hash}" 0 8 CONTACTLAB_MPI_SESSION_TAG)
+
 function(contactlab_add_mpi_test name)
   cmake_parse_arguments(ARG "" "SOURCE;TIMEOUT" "LIBS;RANKS" ${ARGN})
   _contactlab_test_executable(${name})
@@ -84,7 +92,8 @@ function(contactlab_add_mpi_test name)
     add_test(NAME ${name}_np${ranks}
              COMMAND ${MPIEXEC_EXECUTABLE} ${MPIEXEC_NUMPROC_FLAG} ${ranks} ${CONTACTLAB_MPIEXEC_FLAGS}
                      ${MPIEXEC_PREFLAGS} $<TARGET_FILE:${name}> ${MPIEXEC_POSTFLAGS})
+    set(session "/tmp/cl-${CONTACTLAB_MPI_SESSION_TAG}-${name}-np${ranks}")
     set_tests_properties(${name}_np${ranks} PROPERTIES LABELS mpi TIMEOUT ${timeout}
-                         ENVIRONMENT "${CONTACTLAB_MPI_TEST_ENVIRONMENT}")
+                         ENVIRONMENT "${CONTACTLAB_MPI_TEST_ENVIRONMENT};OMPI_MCA_orte_tmpdir_base=${session}")
   endforeach()
 endfunction()

@@ -71,10 +71,23 @@ class TempDir {
   TempDir(const TempDir&) = delete;
   TempDir& operator=(const TempDir&) = delete;
   std::string file(const std::string& name) const { return (path_ / name).string(); }
+  std::string path() const { return path_.string(); }
 
  private:
   std::filesystem::path path_;
 };
+
+// "OMPI_MCA_orte_tmpdir_base=DIR ": the environment that gives this test process's MPI runs
+// (mpiexec, or a program started as a singleton MPI process) a base of their own for Open MPI's
+// session directories, removed at exit. Two started together (two test processes under
+// `ctest -j2`) race to make the shared /tmp/ompi.HOST.UID, and the loser stops ("A call to
+// mkdir was unable to create the desired directory ... File exists"; seen once, 2026-12-05).
+// The base is a short path right under the temporary directory: PMIx's sockets and segments
+// live below it, and a socket path ends at 108 bytes.
+inline std::string mpi_session_environment() {
+  static const TempDir base;
+  return "OMPI_MCA_orte_tmpdir_base=" + base.path() + " ";
+}
 
 // An empty folder of this name under GoogleTest's temporary directory (emptied if it exists).
 inline std::string temp_dir(const std::string& name) {

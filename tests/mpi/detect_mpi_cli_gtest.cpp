@@ -160,8 +160,9 @@ TEST(DetectMpi, RepetitionsAreEachTheSlowestRanks) {
 
 // Without mpiexec (a singleton MPI process) --mpi works on one rank.
 TEST(DetectMpi, RunsWithoutMpiexecAsOneRank) {
-  const auto run = run_command(std::string(CONTACTLAB_MPI_ENV) + " " + contactlab_exe() +
-                               " detect --scene uniform --n 2000 -D 0.03 --mpi decomposed");
+  const auto run =
+      run_command(std::string(CONTACTLAB_MPI_ENV) + " " + mpi_session_environment() +
+                  contactlab_exe() + " detect --scene uniform --n 2000 -D 0.03 --mpi decomposed");
   EXPECT_EQ(run.exit_code, 0) << run.output;
   EXPECT_NE(run.output.find("ranks 1"), std::string::npos) << run.output;
 }

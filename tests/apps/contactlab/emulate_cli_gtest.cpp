@@ -180,10 +180,11 @@ TEST(EmulateCli, TheHalfStencilsOneThreadIsItsMeasurement) {
 TEST(EmulateCli, MpiPredictsEverySeriesAndChecksAMeasuredRun) {
   TempDir dir;
   const std::string measured = dir.file("detect.json"), out = dir.file("mpi.json");
-  const auto detect = run_command(contactlab_exe() + " detect" + kScene +
-                                  " --variant particle/sorted/full/static,200 --threads 1"
-                                  " --mpi replicated --json " +
-                                  measured);
+  const auto detect =
+      run_command(mpi_session_environment() + contactlab_exe() + " detect" + kScene +
+                  " --variant particle/sorted/full/static,200 --threads 1"
+                  " --mpi replicated --json " +
+                  measured);
   if (detect.exit_code == 2 && detect.output.find("built without MPI") != std::string::npos) {
     GTEST_SKIP() << "this contactlab was built without MPI: no measured run to check against";
   }
