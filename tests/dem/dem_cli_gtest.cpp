@@ -273,6 +273,24 @@ TEST(DemCli, ProfileJsonHasMeasuredEmulatedAndTheCheck) {
   for (const char* phase : {"candidates_s", "pair_forces_s", "update_s", "integration_s"}) {
     EXPECT_TRUE(doc["phase_split"].contains(phase)) << phase;
   }
+  // The serial fraction: the list's serial part fitted from 1 and 2 threads is at most the whole
+  // list (the upper bound it replaced); counted whole, it is that bound; without a rebuild, the
+  // serial walls alone.
+  double total = 0.0;
+  for (const auto& [phase, seconds] : doc["phase_split"].items()) total += seconds.get<double>();
+  const auto& split = doc["phase_split"];
+  const double whole =
+      (split["candidates_s"].get<double>() + split["wall_forces_s"].get<double>()) / total;
+  const std::string method = doc["serial_fraction_method"];
+  const double serial = doc["serial_fraction"];
+  if (method.find("fitted from 1 and 2 threads") != std::string::npos) {
+    EXPECT_LE(serial, whole * (1 + 1e-12)) << method;
+  } else if (method.find("counted whole") != std::string::npos) {
+    EXPECT_NEAR(serial, whole, 1e-12 * whole) << method;
+  } else {
+    EXPECT_EQ(method, "no neighbour-list rebuild in the timed steps");
+    EXPECT_NEAR(serial, split["wall_forces_s"].get<double>() / total, 1e-12) << method;
+  }
   const auto bad =
       run_command(contactlab_exe() + " dem profile " + config_path() + " --rounds 0 --json " + out);
   EXPECT_EQ(bad.exit_code, 2) << bad.output;
