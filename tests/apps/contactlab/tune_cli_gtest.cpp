@@ -162,7 +162,9 @@ TEST(TuneCli, PlanningForMoreThreadsThanCoresCalibratesOnTheCores) {
   const json t = json::parse(std::ifstream(dir + "/t.json"));
   double previous = 0.0;
   for (const auto& p : t["predictions"]) {
-    if (previous > 0.0) EXPECT_LT(p["predicted_s"].get<double>(), previous) << p.dump();
+    if (previous > 0.0) {
+      EXPECT_LT(p["predicted_s"].get<double>(), previous) << p.dump();
+    }
     previous = p["predicted_s"].get<double>();
   }
   const auto second = run_command(tune);

@@ -97,6 +97,23 @@ TEST(Fig6Layout, BalancedBlocksEqualTheTestsPlusTheHomesCost) {
                std::invalid_argument);
 }
 
+// One thread does not weigh (the detector runs it as the block): the same time as the block, at
+// costs that would price a weighing.
+TEST(Fig6Layout, BalancedAtOneThreadIsTheBlock) {
+  MachineCosts costs = MachineCosts::tests_only();
+  costs.seconds_per_iteration = 1.0;
+  costs.seconds_per_build = 2.0;
+  const double block =
+      simulate_schedule(fig6_layout(), 1, {ScheduleKind::kStatic, 0}, costs).makespan_seconds;
+  EXPECT_DOUBLE_EQ(
+      simulate_schedule(fig6_layout(), 1, {ScheduleKind::kBalanced, 0}, costs).makespan_seconds,
+      block);
+  // At two threads each thread first weighs its slice: 10 iterations at 1 s, and its builds.
+  EXPECT_GT(
+      simulate_schedule(fig6_layout(), 2, {ScheduleKind::kBalanced, 0}, costs).makespan_seconds,
+      10.0);
+}
+
 TEST(StaticBlock, GivesTheFirstRemainderThreadsOneMore) {
   // 7 iterations on 3 threads: q = 2, r = 1: [0,3) [3,5) [5,7).
   const std::vector<std::uint32_t> work(7, 1);
