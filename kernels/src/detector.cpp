@@ -92,6 +92,7 @@ void ContactDetector::detect(const CellGrid& grid, const Layout& layout, const P
   run.thread_busy_s.assign(threads, 0.0);
   std::vector<std::uint64_t>& thread_tests = run.thread_tests;
   thread_tests.assign(threads, 0);
+  run.thread_homes.assign(threads, 0);
   // Where thread 0's finds are the first rows as they stand, it writes them into the contact
   // list's storage: 110 MB not copied on the paper's scene at one thread. The storage is
   // reserved for the larger of the last run's entries (plus what its last homes may append: a
@@ -140,6 +141,7 @@ void ContactDetector::detect(const CellGrid& grid, const Layout& layout, const P
     op.homes_done();
     run.thread_busy_s[tid] = omp_get_wtime() - loop_start;
     thread_tests[tid] = op.tests();
+    run.thread_homes[tid] = mine.homes.size();
     if (options.observer) options.observer->thread_end(tid);
     assemble_rows(tid, threads, half, rows_in_place);
   }

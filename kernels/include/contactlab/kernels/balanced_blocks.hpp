@@ -18,9 +18,16 @@
 
 namespace contactlab {
 
-// A home's fixed cost (its block of the SIMD test, its output) in pair tests, beside its tests:
-// what the balanced schedule weighs a home by, in the detector and in the schedule model.
-inline constexpr std::uint64_t kHomeTests = 16;
+// A home's fixed cost (its block of the SIMD test, its stencil's rows and their masked tails,
+// its output) in pair tests, beside its tests: what the balanced schedule weighs a home by, in
+// the detector and in the schedule model. Measured as the calibration's per-home over per-test
+// seconds (s_iter / s_test of the sorted particle loop, s_home / s_test of the cell loop): 160 -
+// 280 on the AVX-512 Turin-like VM in three calibrations (a test is an eighth of a vector
+// instruction's work there, a home a few hundred cycles). At 16 (its first value) the blocks
+// balanced the tests and not the time: the threads of the sparse outskirts took most of the
+// homes, and the model emulated `particle/sorted/full/balanced` at 17.0 ms of T_c at 16
+// threads, slower than the block's 13.3; at 200, 9.3 ms (the paper scene, 2026-12-05).
+inline constexpr std::uint64_t kHomeTests = 200;
 
 struct IterationBlock {
   std::uint64_t begin = 0, end = 0;

@@ -141,6 +141,7 @@ struct DetectRun {
   // tiles those of the tiles' longer rows too.
   std::uint64_t candidate_tests = 0;
   std::vector<std::uint64_t> thread_tests;  // each thread's share of them: the loop's balance
+  std::vector<std::uint64_t> thread_homes;  // each thread's homes visited
   bool tiled = false;  // sparse cells shared their ranges as tiles (traverse.hpp: find_tile)
   std::uint64_t contact_pairs = 0;
   std::uint32_t max_cell_occupancy = 0;
