@@ -146,6 +146,7 @@ void ContactDetector::detect(const CellGrid& grid, const Layout& layout, const P
     assemble_rows(tid, threads, half, rows_in_place);
   }
   run.detect_s = omp_get_wtime() - start;
+  run.weigh_s = balanced ? balanced_blocks_.weigh_seconds() : 0.0;
   if (options.observer) options.observer->region_end();
   run.candidate_tests = 0;
   for (const auto t : thread_tests) run.candidate_tests += t;

@@ -127,6 +127,19 @@ TEST(DetectionThreads, BalancedBlocksShareTheWorkOfAClusteredScene) {
   }
 }
 
+// The detector reports the balanced schedule's weighing (what the emulation replays): some time
+// at two threads, none at one (the block runs) nor under another schedule.
+TEST(DetectionThreads, TheBalancedWeighingIsReportedWhereItRuns) {
+  const Case& c = cases().front();
+  const Variant balanced{
+      LoopKind::kParticle, Order::kSorted, Stencil::kFull, {ScheduleKind::kBalanced, 0}};
+  const Variant block{
+      LoopKind::kParticle, Order::kSorted, Stencil::kFull, {ScheduleKind::kStatic, 0}};
+  EXPECT_GT(detect(c.scene, balanced, c.diameter, 2).run.weigh_s, 0.0);
+  EXPECT_EQ(detect(c.scene, balanced, c.diameter, 1).run.weigh_s, 0.0);
+  EXPECT_EQ(detect(c.scene, block, c.diameter, 2).run.weigh_s, 0.0);
+}
+
 // Ghosts (a home range) and a block-cyclic share of the loop (replicated MPI): the rows at any
 // thread count are those of one thread.
 TEST(DetectionThreads, HomeRangesAndBlocksAreTheSameAtEveryThreadCount) {

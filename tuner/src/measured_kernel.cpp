@@ -36,7 +36,8 @@ KernelRun DetectionKernel::run(const Variant& variant, int threads) {
                             : *std::max_element(r.thread_busy_s.begin(), r.thread_busy_s.end());
   return {{{"setup", r.setup_s},
            {"detect", r.detect_s},
-           {"assembly", std::max(0.0, r.detect_s - loop_s)}},
+           {"assembly", std::max(0.0, r.detect_s - loop_s)},
+           {"weigh", r.weigh_s}},
           {{"candidate_tests", r.candidate_tests}, {"contact_pairs", r.contact_pairs}}};
 }
 

@@ -116,6 +116,20 @@ TEST(Fig6Layout, BalancedAtOneThreadIsTheBlock) {
       10.0);
 }
 
+// The weighing at its own constants where they are set (the emulation's measured weighing), at
+// the loop's otherwise: 10 iterations a slice at 1 s, or at 0.25 s.
+TEST(Fig6Layout, BalancedWeighingTakesItsOwnConstantsWhereSet) {
+  MachineCosts costs = MachineCosts::tests_only();
+  costs.seconds_per_iteration = 1.0;
+  const Schedule balanced{ScheduleKind::kBalanced, 0};
+  const double at_loop_costs =
+      simulate_schedule(fig6_layout(), 2, balanced, costs).makespan_seconds;
+  costs.seconds_per_weighed_iteration = 0.25;
+  costs.seconds_per_weighed_build = 0.0;
+  const double at_own = simulate_schedule(fig6_layout(), 2, balanced, costs).makespan_seconds;
+  EXPECT_DOUBLE_EQ(at_loop_costs - at_own, 10 * (1.0 - 0.25));
+}
+
 TEST(StaticBlock, GivesTheFirstRemainderThreadsOneMore) {
   // 7 iterations on 3 threads: q = 2, r = 1: [0,3) [3,5) [5,7).
   const std::vector<std::uint32_t> work(7, 1);

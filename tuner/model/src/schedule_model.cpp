@@ -177,12 +177,16 @@ ScheduleOutcome simulate_balanced(const PreparedWork& work, int threads, const M
   // at one thread too, the weighing entered the emulation's one-thread anchor, which then
   // scaled every thread count's loop by 0.67 - 0.77 (`emulate threads`: the full stencil's
   // balanced blocks checked -13 % at two threads).
+  const double per_iteration = costs.seconds_per_weighed_iteration >= 0.0
+                                   ? costs.seconds_per_weighed_iteration
+                                   : costs.seconds_per_iteration;
+  const double per_build = costs.seconds_per_weighed_build >= 0.0 ? costs.seconds_per_weighed_build
+                                                                  : costs.seconds_per_build;
   for (std::uint64_t t = 0; t < p && p > 1; ++t) {
     const std::uint64_t first = m * t / p, last = m * (t + 1) / p;
-    builder.add_seconds(
-        static_cast<int>(t),
-        static_cast<double>(last - first) * costs.seconds_per_iteration +
-            static_cast<double>(work.builds(first, last)) * costs.seconds_per_build);
+    builder.add_seconds(static_cast<int>(t),
+                        static_cast<double>(last - first) * per_iteration +
+                            static_cast<double>(work.builds(first, last)) * per_build);
   }
   std::uint64_t begin = 0;
   for (std::uint64_t t = 0; t < p; ++t) {

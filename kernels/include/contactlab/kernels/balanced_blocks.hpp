@@ -38,6 +38,7 @@ class BalancedBlocks {
  public:
   // Before the region: room for `threads` threads.
   void prepare(int threads) {
+    weigh_seconds_ = 0.0;
     scratch_.assign(2 * static_cast<std::size_t>(threads) + 1, 0);
     if (slice_weights_.size() < static_cast<std::size_t>(threads)) slice_weights_.resize(threads);
   }
@@ -47,6 +48,7 @@ class BalancedBlocks {
   IterationBlock block(std::uint64_t m, WeightOf weight_of) {
     const int threads = omp_get_num_threads();
     if (threads == 1) return {0, m};
+    const double start = omp_get_wtime();
     const auto tid = static_cast<std::size_t>(omp_get_thread_num());
     const auto p = static_cast<std::size_t>(threads);
     std::uint64_t* const sums = scratch_.data();
@@ -59,6 +61,8 @@ class BalancedBlocks {
     for (std::uint64_t k = first; k < last; ++k) sum += weights[k - first] = weight_of(k);
     sums[tid] = sum;
 #pragma omp barrier
+    // Every slice is weighed here: thread 0's clock holds the slowest weighing.
+    if (tid == 0) weigh_seconds_ = omp_get_wtime() - start;
     std::uint64_t base = 0, total = 0;
     for (std::size_t t = 0; t < p; ++t) {
       if (t < tid) base += sums[t];
@@ -84,7 +88,12 @@ class BalancedBlocks {
     return {bounds[tid], bounds[tid + 1]};
   }
 
+  // The last region's weighing: seconds until every thread had weighed its slice (0 at one
+  // thread, which does not weigh).
+  double weigh_seconds() const { return weigh_seconds_; }
+
  private:
+  double weigh_seconds_ = 0.0;
   std::vector<std::uint64_t> scratch_;
   std::vector<std::vector<std::uint64_t>> slice_weights_;  // per thread: its slice's weights
 };

@@ -137,6 +137,7 @@ struct DetectRun {
   double detect_s = 0.0;  // T_c: pair tests and contact lists
   double total_s() const { return setup_s + detect_s; }
   std::vector<double> thread_busy_s;  // each thread's time inside the detection loop
+  double weigh_s = 0.0;  // of the loop: the balanced schedule's weighing (0 for other schedules)
   // Pair tests made (each pair twice with the full stencil): the stencil's candidates, and with
   // tiles those of the tiles' longer rows too.
   std::uint64_t candidate_tests = 0;

@@ -71,6 +71,11 @@ struct MachineCosts {
   // data; the following iterations of the same cell reuse it).
   double seconds_per_cold_test = 1e-8;
   double seconds_per_region = 5e-6;  // fork, final barrier and join
+  // The balanced schedule's weighing, per iteration and per build of a thread's slice; negative:
+  // at seconds_per_iteration and seconds_per_build, the loop's own (the model's price; the
+  // emulation sets them from a measured weighing). Not calibrated, not cached.
+  double seconds_per_weighed_iteration = -1.0;
+  double seconds_per_weighed_build = -1.0;
 
   // One "second" per pair test and nothing else: the simulated times are pair-test counts,
   // the pure work balance (what Takagi et al. count in their Fig. 6).
