@@ -14,8 +14,9 @@ memory per particle. Every number is measured, except in the table of each --emu
 the speed-ups another machine emulated for these thread counts (emulate threads), beside the
 ones measured here at the same variant, with the emulation's error; and in the table of each
 --tune file (`tune --threads 16 --predict-only` on another machine): the variant its model
-predicted fastest for this many threads, and each structure's best, beside the T_ALL measured
-here for that variant, the fastest measured here, and the regret that choice would have had.
+predicted fastest for this many threads, and each structure's best, beside the regret the chunk
+study here measured for it within its interleaved rounds (for a chunk it did not measure, the
+regrets of the measured chunks just below and above).
 """
 import argparse
 import glob
