@@ -73,6 +73,17 @@ TEST(CalibrationBudget, CostsAFewDozenReferenceWorkloadsAtMost) {
       calibration.seconds, calibration_cpu, reference, before, after, ratio);
   EXPECT_LT(ratio, kMaxReferences);
   EXPECT_EQ(calibration.structures.size(), 4u);  // the default structures, all fitted
+  // The balanced runs fit the weighing's own constants, at more than one thread only.
+  for (const auto& [key, structure] : calibration.structures) {
+    const MachineCosts& c = structure.costs;
+    if (threads > 1) {
+      EXPECT_GE(c.seconds_per_weighed_iteration, 0.0) << key;
+      EXPECT_GE(c.seconds_per_weighed_build, 0.0) << key;
+      EXPECT_GT(c.seconds_per_weighed_iteration + c.seconds_per_weighed_build, 0.0) << key;
+    } else {
+      EXPECT_EQ(c.seconds_per_weighed_iteration, -1.0) << key;
+    }
+  }
 }
 
 }  // namespace

@@ -22,6 +22,8 @@ Calibration sample_calibration() {
   MachineCosts costs;
   costs.seconds_per_test = 3e-9;
   costs.seconds_per_cold_test = 2e-8;
+  costs.seconds_per_weighed_iteration = 9e-10;
+  costs.seconds_per_weighed_build = 0.0;
   c.structures["particle/sorted/half"] = {
       costs, 0.04, 28, {{1, 121.5, 1.8e-9, 1480.0, 2.1e-9}, {2, 121.5, 1.9e-9, 1480.0, 2.3e-9}}};
   return c;
@@ -108,10 +110,10 @@ TEST(TuningCache, StoredEntriesReadBack) {
   EXPECT_FALSE(cache.choice(sample_scene(), 0.05, 4).has_value());
   const json j = file_json(cache.path());
   EXPECT_EQ(j["schema_version"], 1);
-  for (const auto& [name, member] : kMachineCostFields) {
-    EXPECT_TRUE(j["calibrations"].begin()->at("structures").begin()->at("costs").contains(name))
-        << name;
-  }
+  const json& stored = j["calibrations"].begin()->at("structures").begin()->at("costs");
+  for (const auto& [name, member] : kMachineCostFields) EXPECT_TRUE(stored.contains(name)) << name;
+  EXPECT_EQ(stored.at("seconds_per_weighed_iteration"), 9e-10);
+  EXPECT_EQ(stored.at("seconds_per_weighed_build"), 0.0);
 }
 
 TEST(TuningCache, AnotherCostModelIsAMiss) {

@@ -24,7 +24,9 @@ using nlohmann::json;
 constexpr int kCacheSchemaVersion = 1;
 // A calibration stored by a cost model with other constants (another kCostModelVersion) is a
 // cache miss.
-constexpr int kCostModelVersion = 4;  // 3, 4: the output term (output_cost.hpp) by bytes, by degree
+// 3, 4: the output term (output_cost.hpp) by bytes, by degree; 5: the balanced weighing's own
+// constants.
+constexpr int kCostModelVersion = 5;
 
 std::string machine_key() {
   const MachineInfo& m = machine_info();
@@ -82,7 +84,12 @@ void check_cache_version(const JsonIn& at, const int& version) {
 
 template <>
 struct FieldTable<MachineCosts> {
-  static constexpr auto kFields = std::tuple{field_list(kMachineCostFields)};
+  // The loop's constants (fitted together), then the balanced schedule's weighing (fitted apart,
+  // -1 where nothing weighed: a one-thread calibration).
+  static constexpr auto kFields = std::tuple{
+      field_list(kMachineCostFields),
+      field("seconds_per_weighed_iteration", &MachineCosts::seconds_per_weighed_iteration),
+      field("seconds_per_weighed_build", &MachineCosts::seconds_per_weighed_build)};
 };
 
 template <>

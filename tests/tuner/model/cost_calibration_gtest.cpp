@@ -181,5 +181,54 @@ TEST(CalibrateCosts, RejectsBadRuns) {
                std::invalid_argument);
 }
 
+// The weighing alone, as the model prices it: simulate_balanced with every loop constant 0.
+double weighing_seconds(const SyntheticWork& work, int threads, double per_iteration,
+                        double per_build) {
+  MachineCosts costs;
+  for (const auto& [name, member] : kMachineCostFields) costs.*member = 0.0;
+  costs.seconds_per_weighed_iteration = per_iteration;
+  costs.seconds_per_weighed_build = per_build;
+  return simulate_schedule(work.view(), threads, {ScheduleKind::kBalanced, 0}, costs)
+      .makespan_seconds;
+}
+
+TEST(CalibrateWeighing, RecoversKnownConstantsFromADenseAndASparseLoop) {
+  const std::vector<SyntheticWork> works{particle_loop_work(), cell_loop_work()};
+  std::vector<WeighRun> runs;
+  for (const auto& work : works) {
+    for (const int threads : {2, 3, 16}) {
+      runs.push_back({work.view(), threads, weighing_seconds(work, threads, 2e-9, 3e-8)});
+    }
+  }
+  const WeighingFit fit = calibrate_weighing(runs);
+  EXPECT_NEAR(fit.seconds_per_iteration, 2e-9, 1e-6 * 2e-9);
+  EXPECT_NEAR(fit.seconds_per_build, 3e-8, 1e-6 * 3e-8);
+  EXPECT_LT(fit.rms_relative_error, 1e-9);
+}
+
+TEST(CalibrateWeighing, ANegativeConstantIsNeverFitted) {
+  // Times that fall as the builds grow would fit a negative per-build constant: it stays 0 and
+  // the iterations take the time.
+  const SyntheticWork sparse = cell_loop_work(), dense = particle_loop_work();
+  const std::vector<WeighRun> runs{{sparse.view(), 2, 1e-6}, {dense.view(), 2, 8e-6}};
+  const WeighingFit fit = calibrate_weighing(runs);
+  EXPECT_GE(fit.seconds_per_iteration, 0.0);
+  EXPECT_GE(fit.seconds_per_build, 0.0);
+  EXPECT_GT(fit.seconds_per_iteration + fit.seconds_per_build, 0.0);
+}
+
+TEST(CalibrateWeighing, RejectsBadRuns) {
+  EXPECT_THROW(calibrate_weighing(std::vector<WeighRun>{}), std::invalid_argument);
+  const std::vector<std::uint32_t> work(10, 1);
+  try {
+    calibrate_weighing(std::vector<WeighRun>{{work, 1, 1e-6}});
+    FAIL() << "no exception";
+  } catch (const std::invalid_argument& error) {
+    EXPECT_EQ(std::string(error.what()).rfind("calibrate_weighing: run 0 has threads = 1", 0), 0u)
+        << error.what();
+  }
+  EXPECT_THROW(calibrate_weighing(std::vector<WeighRun>{{work, 2, 0.0}}), std::invalid_argument);
+}
+
 }  // namespace
 }  // namespace contactlab::tuner

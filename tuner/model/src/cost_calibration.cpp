@@ -318,4 +318,89 @@ CalibrationResult calibrate_costs(std::span<const TimedRun> runs, const MachineC
   return result;
 }
 
+WeighingFit calibrate_weighing(std::span<const WeighRun> runs) {
+  if (runs.empty()) throw std::invalid_argument("calibrate_weighing: no weighings");
+  std::vector<PreparedWork> works;
+  works.reserve(runs.size());
+  for (std::size_t i = 0; i < runs.size(); ++i) {
+    if (runs[i].threads < 2 || !std::isfinite(runs[i].seconds) || runs[i].seconds <= 0.0) {
+      throw std::invalid_argument("calibrate_weighing: run " + std::to_string(i) +
+                                  " has threads = " + std::to_string(runs[i].threads) +
+                                  ", seconds = " + number_text(runs[i].seconds) +
+                                  " (need threads >= 2 and seconds > 0)");
+    }
+    works.emplace_back(runs[i].work);
+  }
+  using Row = std::array<double, 2>;  // a slice's iterations and builds
+  // The slowest slice of each run under (per_iteration, per_build): simulate_balanced's slices.
+  auto critical = [&](std::size_t i, double per_iteration, double per_build) {
+    const std::uint64_t m = works[i].iterations();
+    const auto p = static_cast<std::uint64_t>(runs[i].threads);
+    Row slowest{};
+    double longest = -1.0;
+    for (std::uint64_t t = 0; t < p; ++t) {
+      const std::uint64_t first = m * t / p, last = m * (t + 1) / p;
+      const Row row{static_cast<double>(last - first),
+                    static_cast<double>(works[i].builds(first, last))};
+      const double seconds = row[0] * per_iteration + row[1] * per_build;
+      if (seconds > longest) {
+        longest = seconds;
+        slowest = row;
+      }
+    }
+    return slowest;
+  };
+  // Least squares of sum_i (r_i . x / s_i - 1)^2 over x >= 0: both constants, else the better
+  // of each alone (the non-negative optimum lies on one of these supports).
+  auto fit = [&](const std::vector<Row>& rows) {
+    double aa = 0.0, ab = 0.0, bb = 0.0, a1 = 0.0, b1 = 0.0;
+    for (std::size_t i = 0; i < rows.size(); ++i) {
+      const double a = rows[i][0] / runs[i].seconds, b = rows[i][1] / runs[i].seconds;
+      aa += a * a;
+      ab += a * b;
+      bb += b * b;
+      a1 += a;
+      b1 += b;
+    }
+    auto residual = [&](const Row& x) {
+      double sum = 0.0;
+      for (std::size_t i = 0; i < rows.size(); ++i) {
+        const double e = (rows[i][0] * x[0] + rows[i][1] * x[1]) / runs[i].seconds - 1.0;
+        sum += e * e;
+      }
+      return sum;
+    };
+    std::vector<Row> supports{{aa > 0.0 ? a1 / aa : 0.0, 0.0}, {0.0, bb > 0.0 ? b1 / bb : 0.0}};
+    const double det = aa * bb - ab * ab;
+    if (det > 1e-12 * aa * bb) {
+      const Row both{(a1 * bb - b1 * ab) / det, (b1 * aa - a1 * ab) / det};
+      if (both[0] >= 0.0 && both[1] >= 0.0) supports.push_back(both);
+    }
+    Row best = supports[0];
+    for (const Row& x : supports) {
+      if (residual(x) < residual(best)) best = x;
+    }
+    return best;
+  };
+  // Start from each slice's iterations alone (the slices are equal in them: the one with the
+  // most builds), then refit while the slowest slices change.
+  Row x{1.0, 1.0};
+  std::vector<Row> rows;
+  for (int round = 0; round < 20; ++round) {
+    std::vector<Row> next;
+    for (std::size_t i = 0; i < runs.size(); ++i) next.push_back(critical(i, x[0], x[1]));
+    if (next == rows) break;
+    rows = std::move(next);
+    x = fit(rows);
+  }
+  WeighingFit result{x[0], x[1], 0.0};
+  for (std::size_t i = 0; i < runs.size(); ++i) {
+    const double e = (rows[i][0] * x[0] + rows[i][1] * x[1]) / runs[i].seconds - 1.0;
+    result.rms_relative_error += e * e;
+  }
+  result.rms_relative_error =
+      std::sqrt(result.rms_relative_error / static_cast<double>(runs.size()));
+  return result;
+}
+
 }  // namespace contactlab::tuner

@@ -172,8 +172,9 @@ ScheduleOutcome simulate_balanced(const PreparedWork& work, int threads, const M
   auto prefix = [&](std::uint64_t k) { return work.tests(0, k) + kHomeTests * work.homes(0, k); };
   const std::uint64_t total = prefix(m);
   // Before the loop each thread weighs an equal slice: a pass over its iterations with a
-  // stencil build per cell, priced as the loop's own iterations and builds. One thread does not
-  // weigh: it runs the whole loop, as the block (the detector's BalancedBlocks::block). Priced
+  // stencil build per cell, at the weighing's constants (the loop's where none were fitted:
+  // MachineCosts). One thread does not weigh: it runs the whole loop, as the block (the
+  // detector's BalancedBlocks::block). Priced
   // at one thread too, the weighing entered the emulation's one-thread anchor, which then
   // scaled every thread count's loop by 0.67 - 0.77 (`emulate threads`: the full stencil's
   // balanced blocks checked -13 % at two threads).

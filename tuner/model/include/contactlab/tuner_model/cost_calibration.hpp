@@ -44,4 +44,26 @@ struct CalibrationResult {
 CalibrationResult calibrate_costs(std::span<const TimedRun> runs,
                                   const MachineCosts& fallback = MachineCosts{});
 
+// One measured weighing of the balanced schedule (DetectRun::weigh_s: until every thread had
+// weighed its equal slice of `work`'s iterations, simulate_balanced's slices).
+struct WeighRun {
+  WorkView work;  // not owned, as TimedRun's
+  int threads = 2;
+  double seconds = 0.0;
+};
+
+struct WeighingFit {
+  double seconds_per_iteration = 0.0;  // MachineCosts::seconds_per_weighed_iteration
+  double seconds_per_build = 0.0;      // MachineCosts::seconds_per_weighed_build
+  double rms_relative_error = 0.0;     // over the runs, with the fitted constants
+};
+
+// The weighing's constants: a slice's time is iterations x per_iteration + builds x
+// per_build, the run's the slowest slice's; fitted by non-negative least squares on relative
+// errors, the slowest slice found again under each fit until it stays. Scenes where the
+// iterations and the builds are not proportional identify both (a dense and a sparse one);
+// otherwise one of them takes all. Throws std::invalid_argument for no runs, a run with
+// threads < 2 (one thread does not weigh), seconds <= 0 or not finite.
+WeighingFit calibrate_weighing(std::span<const WeighRun> runs);
+
 }  // namespace contactlab::tuner

@@ -71,9 +71,12 @@ struct MachineCosts {
   // data; the following iterations of the same cell reuse it).
   double seconds_per_cold_test = 1e-8;
   double seconds_per_region = 5e-6;  // fork, final barrier and join
-  // The balanced schedule's weighing, per iteration and per build of a thread's slice; negative:
-  // at seconds_per_iteration and seconds_per_build, the loop's own (the model's price; the
-  // emulation sets them from a measured weighing). Not calibrated, not cached.
+  // The balanced schedule's weighing, per iteration and per build of a thread's slice, fitted
+  // apart from the loop (calibrate_weighing: the balanced runs of a calibration at more than one
+  // thread; the emulation sets them from the weighing it measured on the scene); negative: at
+  // seconds_per_iteration and seconds_per_build, the loop's own (a one-thread calibration, where
+  // nothing weighs). Cached beside the loop's constants, not in kMachineCostFields (not fitted
+  // with them).
   double seconds_per_weighed_iteration = -1.0;
   double seconds_per_weighed_build = -1.0;
 
@@ -155,7 +158,7 @@ class PreparedWork {
 // - balanced: one block per thread, block t starting where the prefix of tests plus
 //   kHomeTests (balanced_blocks.hpp) per home reaches t / P of the whole (the detector weighs
 //   a home by its cell's stencil, without the tiles' extra candidates), each thread first
-//   weighing an equal slice (its iterations and a build per cell, at the loop's costs).
+//   weighing an equal slice (its iterations and a build per cell, at the weighing's costs).
 // The self-scheduled kinds are simulated on the cost model's clock; equal free times go to the
 // thread that has taken fewer chunks, then the lowest id (so with tests_only() costs every
 // thread still starts with one chunk, as in a real run, even when chunks have no work).
