@@ -25,6 +25,20 @@ ContactLaw impact_law(double e, bool clamp) {
   return law;
 }
 
+// A case in the box [-1, 1]^3 m above the plane z = 0 (the wall "floor"), with `law`; its
+// table is the output, so large overlaps do not warn.
+EngineSettings on_a_floor(const ContactLaw& law) {
+  EngineSettings s = validation_engine();
+  s.warn_large_overlaps = false;
+  s.law = law;
+  s.domain.lo = {-1, -1, -1};
+  s.domain.hi = {1, 1, 1};
+  Wall floor;
+  floor.name = "floor";
+  s.walls.push_back(floor);
+  return s;
+}
+
 // Sphere-sphere (1:1, 3:1) and sphere-wall at e = 0.1, 0.5, 0.9, clamped (the default) and
 // not: e within 0.01 of the prediction, contact time within 1 %.
 std::vector<ValidationRow> normal_impacts() {
@@ -205,18 +219,11 @@ std::vector<ValidationRow> oblique_impacts() {
   std::vector<ValidationRow> rows;
   const double sliding = 3.5 * mu * (1 + e), sticking = 3.5 * mu;
   for (const double angle_deg : {5.0, 10.0, 15.0, 20.0, 30.0, 40.0, 50.0, 60.0, 70.0, 80.0, 85.0}) {
-    EngineSettings s = validation_engine();
-    s.warn_large_overlaps = false;  // the table is the output
-    s.law = impact_law(e, true);
+    EngineSettings s = on_a_floor(impact_law(e, true));
     s.law.contact_time_s = tc;
     s.law.friction = mu;
     s.law.tangential_damping_ratio = 2.0 / 7.0;
     s.dt_s = tc / 500;
-    s.domain.lo = {-1, -1, -1};
-    s.domain.hi = {1, 1, 1};
-    Wall floor;
-    floor.name = "floor";
-    s.walls.push_back(floor);
     const double theta = angle_deg * std::numbers::pi / 180;  // from the normal
     const double vt = speed * std::sin(theta), vn = speed * std::cos(theta);
     Particles p;
@@ -260,17 +267,10 @@ std::vector<ValidationRow> oblique_impacts() {
 
 // A sphere sliding on a plane with friction ends rolling at 5/7 of its initial speed.
 std::vector<ValidationRow> slide_to_roll() {
-  EngineSettings s = validation_engine();
-  s.warn_large_overlaps = false;  // the table is the output
-  s.law = impact_law(0.5, true);
+  EngineSettings s = on_a_floor(impact_law(0.5, true));
   s.law.friction = 0.3;
   s.gravity = {0, 0, -9.81};
   s.dt_s = kTc / 50;
-  s.domain.lo = {-1, -1, -1};
-  s.domain.hi = {1, 1, 1};
-  Wall floor;
-  floor.name = "floor";
-  s.walls.push_back(floor);
   Particles p;
   p.add(0, 0, 0, 0, kRadius, kRadius, kDensity);
   const double rest = 9.81 / pair_coefficients(s.law).k_per_mass;  // m g / k_n
@@ -287,18 +287,11 @@ std::vector<ValidationRow> slide_to_roll() {
 // Rolling resistance (constant torque mu_r R F_n against the rotation): a sphere rolling on a
 // plane decelerates at a = 5/7 mu_r g (m a = -f, I a / R = f R - mu_r R m g).
 std::vector<ValidationRow> rolling_resistance() {
-  EngineSettings s = validation_engine();
-  s.warn_large_overlaps = false;  // the table is the output
-  s.law = impact_law(0.5, true);
+  EngineSettings s = on_a_floor(impact_law(0.5, true));
   s.law.friction = 0.5;
   s.law.rolling_friction = 0.1;
   s.gravity = {0, 0, -9.81};
   s.dt_s = kTc / 50;
-  s.domain.lo = {-1, -1, -1};
-  s.domain.hi = {1, 1, 1};
-  Wall floor;
-  floor.name = "floor";
-  s.walls.push_back(floor);
   Particles p;
   p.add(0, 0, 0, 0, kRadius, kRadius, kDensity);
   p.z[0] = p.z0[0] = kRadius - 9.81 / pair_coefficients(s.law).k_per_mass;
