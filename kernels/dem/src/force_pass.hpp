@@ -206,9 +206,11 @@ void force_pass(const double* kin, std::size_t n, PairList& q, const PairCoeffic
   large_here = 0;
 #pragma omp barrier
   mark(Phase::kPairs);
-  for (std::size_t a = std::max(next, e > q.max_span ? e - q.max_span : 0); a < e; ++a) {
-    accumulate_deferred<kRolling>(kin, q, a, e, acc);
-  }
+  // The particles a later thread may have left j sides for: none after the last range (at one
+  // thread, none at all; scanning their j lists anyway cost the step 0.4 %).
+  const std::size_t deferred_begin =
+      t + 1 < threads ? std::max(next, e > q.max_span ? e - q.max_span : 0) : e;
+  for (std::size_t a = deferred_begin; a < e; ++a) accumulate_deferred<kRolling>(kin, q, a, e, acc);
   mark(Phase::kReduction);
   if (serial_walls) {  // every particle's pairs are in (fused is off: no one finished yet)
 #pragma omp barrier
