@@ -10,6 +10,15 @@
 
 namespace contactlab::dem {
 
+void PairList::resize_to_overwrite(std::size_t n, bool rolling) {
+  dem::resize_to_overwrite(i, n);
+  dem::resize_to_overwrite(j, n);
+  dem::resize_to_overwrite(image, n);
+  for (auto* v : {&hx, &hy, &hz}) dem::resize_to_overwrite(*v, n);
+  dem::resize_to_overwrite(out, kOutStride * n);
+  for (auto* v : {&roll_x, &roll_y, &roll_z}) dem::resize_to_overwrite(*v, rolling ? n : 0);
+}
+
 void PairList::resize(std::size_t n, bool rolling) {
   i.resize(n);
   j.resize(n);
@@ -39,8 +48,8 @@ void offsets_of_sorted(const Key* keys, std::size_t count, std::size_t particles
 void stable_order(const std::vector<std::uint32_t>& by, int bits, int threads,
                   RadixBuffers& buffers) {
   const std::size_t count = by.size();
-  buffers.keys.resize(count);
-  buffers.payload.resize(count);
+  resize_to_overwrite(buffers.keys, count);
+  resize_to_overwrite(buffers.payload, count);
 #pragma omp parallel for schedule(static) num_threads(threads)
   for (std::size_t k = 0; k < count; ++k) {
     buffers.keys[k] = by[k];
@@ -54,7 +63,7 @@ void stable_order(const std::vector<std::uint32_t>& by, int bits, int threads,
 template <class T>
 void gather(std::vector<T>& v, std::vector<T>& scratch, const std::vector<std::uint32_t>& order,
             int threads) {
-  scratch.resize(v.size());
+  resize_to_overwrite(scratch, v.size());
 #pragma omp parallel for schedule(static) num_threads(threads)
   for (std::size_t k = 0; k < order.size(); ++k) scratch[k] = v[order[k]];
   v.swap(scratch);
@@ -118,8 +127,8 @@ void radix_sort(std::vector<std::uint64_t>& keys, std::vector<std::uint32_t>& pa
   constexpr int kDigit = 11;
   constexpr std::size_t kBuckets = std::size_t{1} << kDigit;
   const std::size_t n = keys.size();
-  key_scratch.resize(n);
-  payload_scratch.resize(n);
+  resize_to_overwrite(key_scratch, n);
+  resize_to_overwrite(payload_scratch, n);
   // At most a thread for every 16 buckets' worth of entries: each thread's counts cost kBuckets.
   const int team = static_cast<int>(
       std::clamp<std::size_t>(n / (16 * kBuckets), 1, static_cast<std::size_t>(threads)));

@@ -59,8 +59,8 @@ void collect_springs(const Particles& p, const PairList& pairs, CarriedSprings& 
         return mine;
       },
       [&](std::size_t total) {
-        out.keys.resize(total);
-        out.springs.resize(3 * total);
+        resize_to_overwrite(out.keys, total);
+        resize_to_overwrite(out.springs, 3 * total);
       },
       [&](std::size_t first, std::size_t last, std::size_t at) {
         for (std::size_t k = first; k < last; ++k) {
@@ -127,8 +127,8 @@ RebuildStats NeighborBuilder::rebuild(Particles& p, PairList& pairs, const Domai
   }
   // The scene's rows in stable-id order (by_id_[row] = particle), so that the cell order's
   // ties and every row's partners follow the ids, not the order the particles came in.
-  by_id_.resize(n);
-  sort_.keys.resize(n);
+  resize_to_overwrite(by_id_, n);
+  resize_to_overwrite(sort_.keys, n);
   std::uint32_t max_id = 0;
 #pragma omp parallel for schedule(static) num_threads(threads) reduction(max : max_id)
   for (std::size_t k = 0; k < n; ++k) {
@@ -265,7 +265,7 @@ RebuildStats NeighborBuilder::rebuild(Particles& p, PairList& pairs, const Domai
   pair_start_[0] = 0;
   parallel_inclusive_scan(pair_start_.data() + 1, n, threads, range_sums_);
   const std::size_t count = pair_start_[n];
-  pairs.resize(count, rolling);
+  pairs.resize_to_overwrite(count, rolling);
 #pragma omp parallel for schedule(static) num_threads(threads)
   for (std::size_t a = 0; a < n; ++a) {
     const std::uint32_t row = row_order_[a];
@@ -285,7 +285,7 @@ RebuildStats NeighborBuilder::rebuild(Particles& p, PairList& pairs, const Domai
   if (carried->size() > 0) {
     std::vector<std::uint64_t>& old_keys = carried->keys;
     const std::size_t old_count = old_keys.size();
-    old_payload_.resize(old_count);
+    resize_to_overwrite(old_payload_, old_count);
 #pragma omp parallel for schedule(static) num_threads(threads) reduction(max : max_id)
     for (std::size_t k = 0; k < old_count; ++k) {
       old_payload_[k] = static_cast<std::uint32_t>(k);
@@ -293,8 +293,8 @@ RebuildStats NeighborBuilder::rebuild(Particles& p, PairList& pairs, const Domai
     }
     std::vector<std::uint64_t>& new_keys = sort_.keys;
     std::vector<std::uint32_t>& new_payload = sort_.payload;
-    new_keys.resize(count);
-    new_payload.resize(count);
+    resize_to_overwrite(new_keys, count);
+    resize_to_overwrite(new_payload, count);
 #pragma omp parallel for schedule(static) num_threads(threads)
     for (std::size_t k = 0; k < count; ++k) {
       new_keys[k] = spring_key(p.id[pairs.i[k]], p.id[pairs.j[k]]);

@@ -10,6 +10,7 @@
 
 #include "contactlab/dem/particles.hpp"
 #include "contactlab/kernels/detector.hpp"
+#include "contactlab/kernels/large_vector.hpp"
 
 namespace contactlab::dem {
 
@@ -24,6 +25,22 @@ struct Domain {
 // Periodic image of the partner: code = (ix + 1) + 3 (iy + 1) + 9 (iz + 1), the partner's image
 // at x_j + (ix Lx, iy Ly, iz Lz). kNoImage: the partner itself.
 inline constexpr std::uint8_t kNoImage = 13;
+
+// v resized to n elements, every one of which the caller then writes: past its capacity it is
+// replaced, not grown (nothing is copied), with an eighth to spare. A list that gains a few pairs
+// from one rebuild to the next, or a buffer swapped with one, then keeps its storage: grown
+// exactly, the pairs' arrays and their scratch were reallocated, copied and faulted in at nearly
+// every rebuild (the settled bed: 7 ms of a 54 ms rebuild in the pairs' resize alone, and page
+// faults do not get faster with more threads).
+template <class T, class Allocator>
+void resize_to_overwrite(std::vector<T, Allocator>& v, std::size_t n) {
+  if (n > v.capacity()) {
+    std::vector<T, Allocator> fresh;
+    fresh.reserve(n + n / 8);
+    v.swap(fresh);
+  }
+  v.resize(n);
+}
 
 // What a stable radix sort of indices works in (keys and payloads, and their scratch), kept
 // between rebuilds so that no rebuild zeroes or faults in fresh arrays of the pairs' length (and
@@ -53,8 +70,12 @@ struct PairList {
   // -r_i times it, j's -r_j times it), 1 if touching (else 0), the overlap flag (not read here).
   // With rolling resistance, roll_*: the rolling torque on i [N m] (j gets minus it). A particle's
   // gather reads its own row's run and its j sides through j_pairs, in a fixed order.
+  // Only the pairs whose j another thread owns are written, and read after: LargeVectors, never
+  // zeroed, so that the pages of the rest are not touched at all (at one thread, none; the 64
+  // bytes a pair of the settled bed's 245,000 pairs are 16 MB, which zeroed took 40 ms of page
+  // faults on the 2-core VM whenever the list outgrew them).
   static constexpr std::size_t kOutStride = 8;
-  std::vector<double> out, roll_x, roll_y, roll_z;
+  LargeVector<double> out, roll_x, roll_y, roll_z;
   // Pairs run from the later particle to the earlier (j < i) and are grouped by i, ascending:
   // particle a's own pairs are [rows[a], rows[a + 1]). The pairs where a is the j:
   // j_pairs[j_offsets[a] .. j_offsets[a + 1]), in pair order; they lie in the rows
@@ -65,6 +86,8 @@ struct PairList {
 
   std::size_t size() const { return i.size(); }
   void resize(std::size_t n, bool rolling);
+  // As resize, for a list the caller fills anew (i, j, image, springs; out: the force pass's).
+  void resize_to_overwrite(std::size_t n, bool rolling);
   // Orients (j < i, springs and images follow), groups by i, and indexes rows and j sides, on
   // `threads` threads (the same lists for any count).
   void build_csr(std::size_t particles, int threads, RadixBuffers& buffers);
