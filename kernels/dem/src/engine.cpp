@@ -10,6 +10,7 @@
 #include <cmath>
 #include <limits>
 
+#include "contactlab/kernels/count_then_fill.hpp"
 #include "contactlab/kernels/error.hpp"
 #include "pair_block.hpp"
 
@@ -157,8 +158,8 @@ void Engine::index_pair_constants() {
   PairList& q = pairs_;
   const PairCoefficients& c = coefficients_;
   const std::size_t pairs = q.size();
-  q.m_star.resize(pairs);
-  q.inv_kt.resize(pairs);
+  resize_to_overwrite(q.m_star, pairs);
+  resize_to_overwrite(q.inv_kt, pairs);
 #pragma omp parallel for schedule(static) num_threads(settings_.threads)
   for (std::size_t k = 0; k < pairs; ++k) {
     const double mi = p.mass[q.i[k]], mj = p.mass[q.j[k]];
@@ -176,7 +177,9 @@ void Engine::index_wall_reach() {
   // always checked.
   const Particles& p = particles_;
   const std::size_t n = p.size();
-  wall_reach_.assign(n, 0);
+  wall_reach_.resize(n);
+#pragma omp parallel for schedule(static) num_threads(settings_.threads)
+  for (std::size_t k = 0; k < n; ++k) wall_reach_[k] = 0;
   for (std::size_t w = 0; w < settings_.walls.size() && w < 32; ++w) {
     const Wall& wall = settings_.walls[w];
     if (!wall.active(time_s_)) continue;
@@ -196,12 +199,21 @@ void Engine::index_wall_reach() {
   }
   // The particles some wall may reach, in order (all of them past 32 walls): the finish visits
   // only these, a few per cent of a bed's or a hopper's particles.
-  wall_reachers_.clear();
-  for (std::size_t k = 0; k < n; ++k) {
-    if (wall_reach_[k] != 0 || settings_.walls.size() > 32) {
-      wall_reachers_.push_back(static_cast<std::uint32_t>(k));
-    }
-  }
+  // Listed by each thread for its range, in order: no serial pass over the particles.
+  const bool all = settings_.walls.size() > 32;
+  count_then_fill(
+      n, settings_.threads,
+      [&](std::size_t first, std::size_t last) {
+        std::size_t mine = 0;
+        for (std::size_t k = first; k < last; ++k) mine += all || wall_reach_[k] != 0;
+        return mine;
+      },
+      [&](std::size_t total) { wall_reachers_.resize(total); },
+      [&](std::size_t first, std::size_t last, std::size_t at) {
+        for (std::size_t k = first; k < last; ++k) {
+          if (all || wall_reach_[k] != 0) wall_reachers_[at++] = static_cast<std::uint32_t>(k);
+        }
+      });
 }
 
 void Engine::rebuild() {
