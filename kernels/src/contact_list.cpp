@@ -1,8 +1,12 @@
 #include "contactlab/kernels/contact_list.hpp"
 
+#include <omp.h>
+
 #include <algorithm>
+#include <vector>
 
 #include "contactlab/kernels/atomic_file.hpp"
+#include "contactlab/kernels/count_then_fill.hpp"
 
 namespace contactlab {
 
@@ -12,10 +16,16 @@ ContactList canonicalize(const ContactList& working,
   auto input_of = [&](std::size_t w) -> std::uint32_t {
     return working_to_input.empty() ? static_cast<std::uint32_t>(w) : working_to_input[w];
   };
+  // Each row's count at its input row, then their running sums: no pass of length n on one
+  // thread.
   ContactList canonical;
-  canonical.offsets.assign(n + 1, 0);
+  canonical.offsets.resize(n + 1);
+#pragma omp parallel for schedule(static)
+  for (std::size_t i = 0; i <= n; ++i) canonical.offsets[i] = 0;
+#pragma omp parallel for schedule(static)
   for (std::size_t w = 0; w < n; ++w) canonical.offsets[input_of(w) + 1] = working.count(w);
-  for (std::size_t i = 0; i < n; ++i) canonical.offsets[i + 1] += canonical.offsets[i];
+  std::vector<std::uint64_t> range_sums;
+  parallel_inclusive_scan(canonical.offsets.data() + 1, n, omp_get_max_threads(), range_sums);
   canonical.partners.resize(working.partners.size());
 #pragma omp parallel for schedule(dynamic, 1024)
   for (std::size_t w = 0; w < n; ++w) {

@@ -7,6 +7,7 @@
 #include <bit>
 #include <cmath>
 #include <limits>
+#include <span>
 #include <string>
 #include <utility>
 
@@ -15,32 +16,6 @@
 #include "contactlab/kernels/variant.hpp"
 
 namespace contactlab::dem {
-
-namespace {
-
-// values[0..n) replaced by their running sums: each thread sums an equal range, then adds the
-// sums of the ranges before it.
-void parallel_inclusive_scan(std::uint64_t* values, std::size_t n, int threads,
-                             std::vector<std::uint64_t>& range_sums) {
-  range_sums.assign(static_cast<std::size_t>(threads), 0);
-#pragma omp parallel num_threads(threads)
-  {
-    const auto t = static_cast<std::size_t>(omp_get_thread_num());
-    const auto team = static_cast<std::size_t>(omp_get_num_threads());
-    const std::size_t first = n * t / team, last = n * (t + 1) / team;
-    std::uint64_t running = 0;
-    for (std::size_t k = first; k < last; ++k) running = values[k] += running;
-    range_sums[t] = running;
-#pragma omp barrier
-    std::uint64_t base = 0;
-    for (std::size_t u = 0; u < t; ++u) base += range_sums[u];
-    if (base > 0) {
-      for (std::size_t k = first; k < last; ++k) values[k] += base;
-    }
-  }
-}
-
-}  // namespace
 
 std::uint64_t spring_key(std::uint32_t a, std::uint32_t b) {
   return a < b ? (std::uint64_t{a} << 32 | b) : (std::uint64_t{b} << 32 | a);
@@ -237,10 +212,20 @@ RebuildStats NeighborBuilder::rebuild(Particles& p, PairList& pairs, const Domai
   const ContactList list = detector_.neighbor_list(scene_, options, skin);
 
   // 4. The new order: the particles' rows in cell (slot) order.
-  row_order_.clear();
-  for (std::uint32_t input : detector_.working_to_input()) {
-    if (input < n) row_order_.push_back(input);
-  }
+  const std::span<const std::uint32_t> working_to_input = detector_.working_to_input();
+  count_then_fill(
+      working_to_input.size(), threads,
+      [&](std::size_t first, std::size_t last) {
+        std::size_t mine = 0;
+        for (std::size_t w = first; w < last; ++w) mine += working_to_input[w] < n;
+        return mine;
+      },
+      [&](std::size_t total) { resize_to_overwrite(row_order_, total); },
+      [&](std::size_t first, std::size_t last, std::size_t at) {
+        for (std::size_t w = first; w < last; ++w) {
+          if (working_to_input[w] < n) row_order_[at++] = working_to_input[w];
+        }
+      });
   order_.resize(n);
   new_index_.resize(n);  // by scene row
   pair_start_.resize(n + 1);

@@ -8,6 +8,7 @@
 #include <omp.h>
 
 #include <cstddef>
+#include <cstdint>
 #include <vector>
 
 namespace contactlab {
@@ -32,6 +33,28 @@ void count_then_fill(std::size_t n, int threads, Count&& count, Size&& size, Fil
       size(range_start[team]);
     }  // implicit barrier
     fill(first, last, range_start[t]);
+  }
+}
+
+// values[0..n) replaced by their running sums on `threads` threads: each sums an equal range,
+// then adds the sums of the ranges before it (range_sums: its scratch, one entry a thread).
+inline void parallel_inclusive_scan(std::uint64_t* values, std::size_t n, int threads,
+                                    std::vector<std::uint64_t>& range_sums) {
+  range_sums.assign(static_cast<std::size_t>(threads), 0);
+#pragma omp parallel num_threads(threads)
+  {
+    const auto t = static_cast<std::size_t>(omp_get_thread_num());
+    const auto team = static_cast<std::size_t>(omp_get_num_threads());
+    const std::size_t first = n * t / team, last = n * (t + 1) / team;
+    std::uint64_t running = 0;
+    for (std::size_t k = first; k < last; ++k) running = values[k] += running;
+    range_sums[t] = running;
+#pragma omp barrier
+    std::uint64_t base = 0;
+    for (std::size_t u = 0; u < t; ++u) base += range_sums[u];
+    if (base > 0) {
+      for (std::size_t k = first; k < last; ++k) values[k] += base;
+    }
   }
 }
 
