@@ -72,7 +72,9 @@ inline std::vector<double> state_by_id(const Engine& engine) {
   return out;
 }
 
-inline bool bitwise_equal(const std::vector<double>& a, const std::vector<double>& b) {
+// Any two arrays of doubles (a std::vector, a particle array), bit for bit.
+template <class A, class B>
+bool bitwise_equal(const A& a, const B& b) {
   return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(double)) == 0;
 }
 

@@ -155,7 +155,7 @@ TEST(DemPairBlock, GatheredPairsMatchOneByOne) {
   for (std::size_t k = 0; k < s.q.size(); k += 3) ks.push_back(static_cast<std::uint32_t>(k));
   std::reverse(ks.begin(), ks.end());
   ks.resize(ks.size() - 5);  // a ragged tail
-  const std::vector<double> springs_before = s.q.hx;
+  const AlignedVector<double> springs_before = s.q.hx;
   const OneByOne expected = one_by_one<true>(s, ks);
   std::vector<double> storage;
   PairBlock blk(storage);

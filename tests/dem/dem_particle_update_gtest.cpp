@@ -34,7 +34,8 @@ Particles random_particles(std::size_t n, std::mt19937_64& rng) {
   return p;
 }
 
-bool same_bits(const std::vector<double>& a, const std::vector<double>& b) {
+template <class A, class B>
+bool same_bits(const A& a, const B& b) {
   return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(double)) == 0;
 }
 
@@ -74,7 +75,7 @@ TEST(DemParticleUpdate, FinishWithoutKickVelocitiesStay) {
   std::mt19937_64 rng(3);
   std::vector<double> kin(kKinStride * n, 1.0), acc(kAccStride * n, 0.5);
   Particles p = random_particles(n, rng);
-  const std::vector<double> vx = p.vx;
+  const AlignedVector<double> vx = p.vx;
   finish_particles(kin.data(), acc.data(), p, {0.0, {0.0, 0.0, -9.81}, 1e-5, false}, 0, n);
   EXPECT_EQ(p.vx, vx);
   EXPECT_EQ(p.contacts[3], 0);  // 0.5 touching truncates to 0

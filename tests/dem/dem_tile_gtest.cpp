@@ -185,7 +185,8 @@ TEST_F(DemTile, KeepsTheLowestWhenTheTargetHoldsFewer) {
   const TiledBed few = tile_column(*column_, *state_, silo(0.012, 100), {3, 3});
   EXPECT_EQ(few.report.kept, 100u);
   EXPECT_EQ(few.report.over_count, all.report.kept - 100);
-  std::vector<double> z_all(all.parts.particles.z), z_few(few.parts.particles.z);
+  std::vector<double> z_all(all.parts.particles.z.begin(), all.parts.particles.z.end()),
+      z_few(few.parts.particles.z.begin(), few.parts.particles.z.end());
   std::sort(z_all.begin(), z_all.end());
   std::sort(z_few.begin(), z_few.end());
   EXPECT_TRUE(std::equal(z_few.begin(), z_few.end(), z_all.begin()));

@@ -1,11 +1,14 @@
 // LargeVector: huge allocations start at staggered offsets past their 2 MiB boundary, so that
 // arrays read side by side do not share the sets of a low-associativity cache (the simulated
-// FX10 L1: 2 ways of 16 KiB), and they are freed from the block's start.
+// FX10 L1: 2 ways of 16 KiB), and they are freed from the block's start. Smaller ones, and
+// every AlignedVector, start on a cache line (a vector load of eight doubles at an index that
+// is a multiple of eight is then one line, not two).
 #include <gtest/gtest.h>
 
 #include <cstdint>
 #include <set>
 
+#include "contactlab/kernels/aligned_vector.hpp"
 #include "contactlab/kernels/large_vector.hpp"
 
 namespace contactlab {
@@ -48,6 +51,38 @@ TEST(LargeVector, GrowsShrinksAndSwapsAcrossTheHugeThreshold) {
   EXPECT_EQ(b[4], 4u);
   LargeVector<std::uint32_t>().swap(a);
   EXPECT_TRUE(a.empty());
+}
+
+// Sizes on both sides of glibc's mmap threshold (128 KiB by default), where malloc's blocks
+// begin 16 bytes past a page: each starts on a cache line, and stays so as it grows.
+TEST(LargeVector, SmallArraysStartOnACacheLine) {
+  for (const std::size_t n : {std::size_t{1}, std::size_t{7}, std::size_t{1000}, std::size_t{65536},
+                              std::size_t{200000}}) {
+    const LargeVector<double> v(n);
+    EXPECT_EQ(address(v.data()) % kCacheLine, 0u) << n;
+  }
+  LargeVector<double> empty;
+  empty.reserve(0);
+  empty.push_back(1.0);
+  EXPECT_EQ(address(empty.data()) % kCacheLine, 0u);
+}
+
+TEST(AlignedVector, StartsOnACacheLineAndValueInitialises) {
+  for (const std::size_t n : {std::size_t{1}, std::size_t{9}, std::size_t{4096}, std::size_t{65536},
+                              std::size_t{300000}}) {
+    AlignedVector<double> v(n);
+    EXPECT_EQ(address(v.data()) % kCacheLine, 0u) << n;
+    EXPECT_EQ(v.front(), 0.0);
+    EXPECT_EQ(v.back(), 0.0);
+    v.resize(3 * n, 2.0);  // regrown: a new block, again on a line
+    EXPECT_EQ(address(v.data()) % kCacheLine, 0u) << n;
+    EXPECT_EQ(v[n - 1], 0.0);
+    EXPECT_EQ(v[3 * n - 1], 2.0);
+  }
+  AlignedVector<std::uint16_t> small(3), other(70000, 5);
+  small.swap(other);
+  EXPECT_EQ(address(small.data()) % kCacheLine, 0u);
+  EXPECT_EQ(small[69999], 5u);
 }
 
 }  // namespace

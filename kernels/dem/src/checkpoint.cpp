@@ -24,8 +24,8 @@ template <class T>
 void put(std::ostream& out, const T& v) {
   out.write(reinterpret_cast<const char*>(&v), sizeof(T));
 }
-template <class T>
-void put_array(std::ostream& out, const std::vector<T>& v) {
+template <class T, class Allocator>
+void put_array(std::ostream& out, const std::vector<T, Allocator>& v) {
   put<std::uint64_t>(out, v.size());
   out.write(reinterpret_cast<const char*>(v.data()),
             static_cast<std::streamsize>(v.size() * sizeof(T)));
@@ -41,8 +41,8 @@ class Reader {
     if (!in_) throw InputError(path_ + ": checkpoint is truncated");
     return v;
   }
-  template <class T>
-  void array(std::vector<T>& v, std::uint64_t expected) {
+  template <class T, class Allocator>
+  void array(std::vector<T, Allocator>& v, std::uint64_t expected) {
     const auto n = get<std::uint64_t>();
     if (n != expected) throw InputError(path_ + ": checkpoint arrays do not match the config");
     v.resize(n);

@@ -245,7 +245,7 @@ void Engine::check_containment() const {
   if (!settings_.domain_bounds_particles) return;
   const Particles& p = particles_;
   const Domain& d = settings_.domain;
-  const std::vector<double>* axes[3] = {&p.x, &p.y, &p.z};
+  const AlignedVector<double>* axes[3] = {&p.x, &p.y, &p.z};
   const auto n = static_cast<std::int64_t>(p.size());
   std::int64_t first = n;
 #pragma omp parallel for num_threads(settings_.threads) reduction(min : first) schedule(static)

@@ -289,7 +289,7 @@ inline void accumulate_shared(const double* kin, const PairList& q, std::size_t 
 template <bool kRolling, bool kClamp, class Finish, class Walls, class Mark>
 void force_pass_shared(const double* kin, std::size_t n, PairList& q, const PairCoefficients& c,
                        double dt, bool atomic, bool serial_walls, double* acc,
-                       std::vector<std::vector<double>>& thread_acc, std::vector<double>& scratch,
+                       std::vector<AlignedVector<double>>& thread_acc, std::vector<double>& scratch,
                        Finish& finish, Walls& walls, Mark& mark, std::uint64_t& large,
                        std::uint32_t& bad_pair, std::uint32_t& bad_wall) {
   const auto t = static_cast<std::size_t>(omp_get_thread_num());

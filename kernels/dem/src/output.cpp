@@ -84,8 +84,8 @@ void FrameWriter::write(const Snapshot& run, int frame) {
       for (std::uint32_t a : order) out << get(a) << '\n';
       out << "</DataArray>\n";
     };
-    auto vector = [&](const char* name, const std::vector<double>& x, const std::vector<double>& y,
-                      const std::vector<double>& z) {
+    auto vector = [&](const char* name, const AlignedVector<double>& x,
+                      const AlignedVector<double>& y, const AlignedVector<double>& z) {
       out << fmt::format(
           "<DataArray type=\"Float64\" Name=\"{}\" NumberOfComponents=\"3\" format=\"ascii\">\n",
           name);

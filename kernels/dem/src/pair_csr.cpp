@@ -60,9 +60,9 @@ void stable_order(const std::vector<std::uint32_t>& by, int bits, int threads,
 }
 
 // v[k] becomes v[order[k]], gathered on `threads` threads into `scratch`, which it swaps with.
-template <class T>
-void gather(std::vector<T>& v, std::vector<T>& scratch, const std::vector<std::uint32_t>& order,
-            int threads) {
+template <class T, class Allocator>
+void gather(std::vector<T, Allocator>& v, std::vector<T, Allocator>& scratch,
+            const std::vector<std::uint32_t>& order, int threads) {
   resize_to_overwrite(scratch, v.size());
 #pragma omp parallel for schedule(static) num_threads(threads)
   for (std::size_t k = 0; k < order.size(); ++k) scratch[k] = v[order[k]];

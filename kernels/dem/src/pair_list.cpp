@@ -76,7 +76,7 @@ RebuildStats NeighborBuilder::rebuild(Particles& p, PairList& pairs, const Domai
                        number_text(domain.length(a)) + " m) is under 3 pair reaches (" +
                        number_text(3.0 * reach) + " m)");
     }
-    std::vector<double>& c = a == 0 ? p.x : a == 1 ? p.y : p.z;
+    auto& c = a == 0 ? p.x : a == 1 ? p.y : p.z;
     const double lo = domain.lo[a], len = domain.length(a);
 #pragma omp parallel for schedule(static) num_threads(threads)
     for (std::size_t k = 0; k < n; ++k) {

@@ -7,13 +7,13 @@
 namespace contactlab::dem {
 namespace {
 
-// The arrays of one element type take turns with one scratch array: each is gathered into the
-// scratch, on `threads` threads, and swapped with it, so the next array of that type is gathered
-// into the last one's storage. Fresh arrays had zeroed and faulted in 38 arrays' pages on one
-// thread at every rebuild (on the 900,000-particle hopper, a quarter of a rebuild).
-template <class T>
-void gather_one(std::vector<T>& v, std::vector<T>& scratch, std::span<const std::uint32_t> order,
-                int threads) {
+// The arrays of one type (element and allocator) take turns with one scratch array: each is
+// gathered into the scratch, on `threads` threads, and swapped with it, so the next array of that
+// type is gathered into the last one's storage. Fresh arrays had zeroed and faulted in 38 arrays'
+// pages on one thread at every rebuild (on the 900,000-particle hopper, a quarter of a rebuild).
+template <class V>
+void gather_one(V& v, V& scratch, std::span<const std::uint32_t> order, int threads) {
+  using T = typename V::value_type;
   scratch.resize(order.size());
   T* const out = scratch.data();
   const T* const in = v.data();
@@ -56,12 +56,15 @@ void Particles::gather(std::span<const std::uint32_t> order, int threads) {
   std::vector<std::uint32_t> scratch_u32;
   std::vector<std::uint16_t> scratch_u16;
   std::vector<double> scratch_f64;
+  AlignedVector<double> scratch_aligned;
   auto scratch_for = [&](auto& v) -> auto& {
-    using T = typename std::remove_reference_t<decltype(v)>::value_type;
-    if constexpr (std::is_same_v<T, std::uint32_t>)
+    using V = std::remove_reference_t<decltype(v)>;
+    if constexpr (std::is_same_v<V, std::vector<std::uint32_t>>)
       return scratch_u32;
-    else if constexpr (std::is_same_v<T, std::uint16_t>)
+    else if constexpr (std::is_same_v<V, std::vector<std::uint16_t>>)
       return scratch_u16;
+    else if constexpr (std::is_same_v<V, AlignedVector<double>>)
+      return scratch_aligned;
     else
       return scratch_f64;
   };

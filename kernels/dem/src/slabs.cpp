@@ -10,14 +10,6 @@
 
 namespace contactlab::dem {
 
-namespace {
-
-const std::vector<double>& coordinate(const Particles& p, int axis) {
-  return axis == 0 ? p.x : axis == 1 ? p.y : p.z;
-}
-
-}  // namespace
-
 double Slabs::wrap(double c) const {
   if (!periodic) return c;
   const double len = hi - lo;
@@ -55,7 +47,7 @@ void Slabs::ranks_within(double c, double halo, int self, std::vector<int>& out)
 
 Particles slab_particles(const Slabs& slabs, const Particles& particles, int rank) {
   Particles own = particles;
-  const std::vector<double>& c = coordinate(particles, slabs.axis);
+  const auto& c = particles.coordinate(slabs.axis);
   own.for_each_array([&](auto& v) {
     std::size_t kept = 0;
     for (std::size_t a = 0; a < v.size(); ++a) {
@@ -85,7 +77,7 @@ Slabs balance_slabs(const Particles& particles, std::span<const double> work, in
   slabs.lo = domain.lo[axis];
   slabs.hi = domain.hi[axis];
   const double inf = std::numeric_limits<double>::infinity();
-  const std::vector<double>& c = coordinate(particles, axis);
+  const auto& c = particles.coordinate(axis);
   const std::size_t n = c.size();
   std::vector<std::uint32_t> order(n);
   std::iota(order.begin(), order.end(), 0u);
@@ -119,7 +111,7 @@ int longest_axis(const Particles& particles, const Domain& domain) {
   int best = 2;
   double best_extent = -1.0;
   for (int a = 0; a < 3; ++a) {
-    const std::vector<double>& c = coordinate(particles, a);
+    const auto& c = particles.coordinate(a);
     double extent = 0.0;
     if (domain.periodic[a]) {
       extent = domain.length(a);
@@ -151,7 +143,7 @@ SlabLoad slab_load(const Slabs& slabs, const Particles& particles, std::span<con
   load.particles.assign(ranks, 0);
   load.ghosts.assign(ranks, 0);
   load.work.assign(ranks, 0.0);
-  const std::vector<double>& c = coordinate(particles, slabs.axis);
+  const auto& c = particles.coordinate(slabs.axis);
   std::vector<int> near;
   for (std::size_t k = 0; k < c.size(); ++k) {
     const int r = slabs.owner(c[k]);

@@ -22,10 +22,6 @@ std::pair<double, double> work_total_and_mean(const Particles& particles, const 
   return {total, particles.size() > 0 ? total / static_cast<double>(particles.size()) : 0.0};
 }
 
-const std::vector<double>& coordinate(const Particles& p, int axis) {
-  return axis == 0 ? p.x : axis == 1 ? p.y : p.z;
-}
-
 }  // namespace
 
 std::vector<DemMpiPoint> emulate_dem_mpi_strong(const Particles& particles, const PairList& pairs,
@@ -41,7 +37,7 @@ std::vector<DemMpiPoint> emulate_dem_mpi_strong(const Particles& particles, cons
     // Per rank: the ranks it exchanges with and the ghosts it sends.
     std::vector<std::set<int>> partners(static_cast<std::size_t>(r));
     std::vector<std::uint64_t> sent(static_cast<std::size_t>(r), 0);
-    const std::vector<double>& c = coordinate(particles, plan.slabs.axis);
+    const auto& c = particles.coordinate(plan.slabs.axis);
     std::vector<int> near;
     for (std::size_t k = 0; k < c.size(); ++k) {
       const int owner = plan.slabs.owner(c[k]);
@@ -92,7 +88,7 @@ std::vector<DemMpiPoint> emulate_dem_mpi_weak(const Particles& particles, const 
                                               const NetworkModel& network) {
   const auto [total, mean_work] = work_total_and_mean(particles, pairs);
   const SlabPlan plan = plan_slabs(particles, pairs, settings, 1, axis);
-  const std::vector<double>& c = coordinate(particles, plan.slabs.axis);
+  const auto& c = particles.coordinate(plan.slabs.axis);
   // A copy's neighbours hold as ghosts its particles within the halo of its two ends, and it
   // holds as many of theirs.
   double lo = 0.0, hi = 0.0;

@@ -18,10 +18,6 @@ namespace {
 
 using contactlab::mpi::all_to_all_bytes;
 
-const std::vector<double>& coordinate(const Particles& p, int axis) {
-  return axis == 0 ? p.x : axis == 1 ? p.y : p.z;
-}
-
 template <class T>
 void append(std::vector<char>& out, const T& value) {
   const char* at = reinterpret_cast<const char*>(&value);
@@ -138,7 +134,7 @@ void HaloExchange::rebalance(const Particles& p) {
   // extent, reduced over the ranks: O(kBins) per rank, whatever N is), each cut where the
   // running work crosses r W / R, interpolated within its bin.
   constexpr int kBins = 4096;
-  const std::vector<double>& c = coordinate(p, slabs_.axis);
+  const auto& c = p.coordinate(slabs_.axis);
   double extent[2] = {std::numeric_limits<double>::infinity(),
                       std::numeric_limits<double>::infinity()};  // -min, max
   for (const double v : c) {
@@ -175,7 +171,7 @@ void HaloExchange::exchange_particles(Particles& p, CarriedSprings& carried) {
   // 1. Migration: the particles whose slab changed, each with the springs of all its contacts
   //    (this rank owned it, so it computed every one of them). Message to rank r: count,
   //    records, spring count, (key, spring) entries.
-  const std::vector<double>& c = coordinate(p, slabs_.axis);
+  const auto& c = p.coordinate(slabs_.axis);
   std::vector<std::vector<char>> bytes(rank_count);
   std::vector<std::uint8_t> keep(p.size(), 1);
   std::unordered_map<std::uint32_t, int> leaving;  // id -> its new owner
@@ -255,7 +251,7 @@ void HaloExchange::exchange_particles(Particles& p, CarriedSprings& carried) {
   // 2. Ghosts: every owned particle within the halo width of another rank's slab, its whole
   //    record to that rank; each step after this, its refresh in the same order.
   owned_ = p.size();
-  const std::vector<double>& pos = coordinate(p, slabs_.axis);
+  const auto& pos = p.coordinate(slabs_.axis);
   for (std::size_t r = 0; r < rank_count; ++r) {
     bytes[r].clear();
     send_ids_[r].clear();

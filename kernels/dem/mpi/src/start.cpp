@@ -81,10 +81,6 @@ void broadcast_plan(MPI_Comm comm, SlabPlan& plan, std::uint64_t& particles,
   plan.slabs.cuts.assign(header.begin() + 8, header.end());
 }
 
-const std::vector<double>& coordinate(const Particles& p, int axis) {
-  return axis == 0 ? p.x : axis == 1 ? p.y : p.z;
-}
-
 }  // namespace
 
 RankStart deal_start(MPI_Comm comm, const Particles* all, const PairList* pairs,
@@ -108,7 +104,7 @@ RankStart deal_start(MPI_Comm comm, const Particles* all, const PairList* pairs,
   shape.wall_spring.assign(wall_arrays, {});
   if (root) {
     const Slabs& slabs = start.plan.slabs;
-    const std::vector<double>& c = coordinate(*all, slabs.axis);
+    const auto& c = all->coordinate(slabs.axis);
     for (std::size_t a = 0; a < all->size(); ++a)
       append_record(*all, a, records[slabs.owner(c[a])]);
     // A touching pair's spring to every rank whose slab widened by two halos holds its first

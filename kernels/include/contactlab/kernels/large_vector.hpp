@@ -48,8 +48,9 @@ struct HugePageAllocator {
   T* allocate(std::size_t n) {
     static_assert(alignof(T) <= 64, "colour offsets keep 64-byte alignment only");
     const std::size_t bytes = n * sizeof(T);
-    if (bytes < kHugePage) {
-      if (void* p = std::malloc(bytes ? bytes : 1)) return static_cast<T*>(p);
+    if (bytes < kHugePage) {  // on a cache line, as the colours keep it (aligned_vector.hpp)
+      if (void* p = std::aligned_alloc(64, (bytes + 63) / 64 * 64 + (bytes == 0 ? 64 : 0)))
+        return static_cast<T*>(p);
       throw std::bad_alloc();
     }
     const std::size_t offset = large_vector_detail::next_colour_offset();
@@ -60,7 +61,7 @@ struct HugePageAllocator {
     return reinterpret_cast<T*>(static_cast<char*>(p) + offset);
   }
   // The block began at the huge-page boundary below p (offsets are less than a huge page);
-  // allocations under a huge page came from malloc unchanged.
+  // allocations under a huge page came from aligned_alloc unchanged.
   void deallocate(T* p, std::size_t n) noexcept {
     if (n * sizeof(T) < kHugePage) {
       std::free(p);

@@ -265,13 +265,13 @@ class Engine {
   bool drifted_ = false;
   double drifted_disp_sq_ = 0.0;
   std::uint32_t drifted_bad_ = UINT32_MAX;
-  std::vector<double> kin_;  // what the pair loop reads per particle, side by side
+  AlignedVector<double> kin_;  // what the pair loop reads per particle, side by side
   // Per particle, bit w set when wall w may touch it before the next rebuild.
   std::vector<std::uint32_t> wall_reach_;
   std::vector<std::uint32_t> wall_reachers_;  // the particles with a bit in wall_reach_, in order
-  std::vector<double> acc_;  // per particle: the force pass's pair sums (detail::kAccStride)
+  AlignedVector<double> acc_;  // per particle: the force pass's pair sums (detail::kAccStride)
   std::vector<std::vector<double>> block_scratch_;  // per thread: the force pass's pair block
-  std::vector<std::vector<double>> thread_acc_;     // per thread: sums (per-thread accumulation)
+  std::vector<AlignedVector<double>> thread_acc_;   // per thread: sums (per-thread accumulation)
 };
 
 }  // namespace contactlab::dem

@@ -50,21 +50,21 @@ struct RadixBuffers {
   std::vector<std::uint32_t> payload, payload_scratch;
   // What the pairs' arrays are gathered into and swapped with (payload_scratch for the indices).
   std::vector<std::uint8_t> byte_scratch;
-  std::vector<double> real_scratch;
+  AlignedVector<double> real_scratch;
 };
 
 struct PairList {
-  std::vector<std::uint32_t> i, j;  // particle indices (current order)
-  std::vector<std::uint8_t> image;  // periodic image code of j
-  std::vector<double> hx, hy, hz;   // tangential spring xi [m], oriented as seen from i
+  std::vector<std::uint32_t> i, j;   // particle indices (current order)
+  std::vector<std::uint8_t> image;   // periodic image code of j
+  AlignedVector<double> hx, hy, hz;  // tangential spring xi [m], oriented as seen from i
   // The full list's next-step springs: its j sides recompute a pair from the springs of this
   // step while the i side writes the new ones here (swapped in after the pass; not saved).
-  std::vector<double> hx_next, hy_next, hz_next;
+  AlignedVector<double> hx_next, hy_next, hz_next;
   // Per pair, the law's constants that depend only on the two particles: the reduced mass
   // m* = m_i m_j / (m_i + m_j) [kg] and 1 / k_t [m/N] (0 where k_t is 0). Set by the engine
   // whenever the list is built or restored (Engine::index_pair_constants), not saved: the
   // force pass streams them instead of dividing per pair per step.
-  std::vector<double> m_star, inv_kt;
+  AlignedVector<double> m_star, inv_kt;
   // Per pair, in pair order, written by the force pass (zero while apart), kOutStride doubles
   // a pair, one cache line: the force on i [N] (j gets minus it), n x F_t [N] (i's torque is
   // -r_i times it, j's -r_j times it), 1 if touching (else 0), the overlap flag (not read here).
