@@ -46,9 +46,9 @@ struct HugePageAllocator {
   HugePageAllocator(const HugePageAllocator<U>&) noexcept {}
 
   T* allocate(std::size_t n) {
-    static_assert(alignof(T) <= 64, "colour offsets keep 64-byte alignment only");
+    static_assert(alignof(T) <= 64, "colour offsets and small blocks keep 64-byte alignment only");
     const std::size_t bytes = n * sizeof(T);
-    if (bytes < kHugePage) {  // on a cache line, as the colours keep it (aligned_vector.hpp)
+    if (bytes < kHugePage) {  // on a cache line, as the colours keep it
       if (void* p = std::aligned_alloc(64, (bytes + 63) / 64 * 64 + (bytes == 0 ? 64 : 0)))
         return static_cast<T*>(p);
       throw std::bad_alloc();
