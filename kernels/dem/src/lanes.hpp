@@ -295,16 +295,14 @@ template <class P, class M>
 // Columns 0..3 of the top halves of rows r[0..7] (lanes 4..7 of each). With one register a
 // row, 12 shuffles, not a full transpose's 24 for half of its columns; with several, the
 // transpose of the top registers only (the compiler drops the rest of transpose8).
+// With one register a row: the columns of four quarter-rows laid side by side, q[p] holding
+// row p's four values, then row p + 4's (the tops of a transpose's two halves).
 template <class P = LanePart, class M = MaskPart>
-[[gnu::always_inline]] inline void top_columns(const Lanes (&r)[8], Lanes& c0, Lanes& c1, Lanes& c2,
-                                               Lanes& c3) {
+[[gnu::always_inline]] inline void columns_of_paired_quarters(const P (&q)[4], Lanes& c0, Lanes& c1,
+                                                              Lanes& c2, Lanes& c3) {
   if constexpr (kLaneParts == 1) {
-    constexpr M kTops{4, 5, 6, 7, 12, 13, 14, 15};
     constexpr M kEven{0, 8, 2, 10, 4, 12, 6, 14}, kOdd{1, 9, 3, 11, 5, 13, 7, 15};
     constexpr M kPairLo{0, 1, 8, 9, 4, 5, 12, 13}, kPairHi{2, 3, 10, 11, 6, 7, 14, 15};
-    P q[4];  // the tops of rows p and p + 4, side by side
-    for (int p = 0; p < 4; ++p)
-      q[p] = CONTACTLAB_SHUFFLE(part_of(r[p], 0), part_of(r[p + 4], 0), kTops);
     // even01: c0 of 0 1, c2 of 0 1, c0 of 4 5, ..; odd01: c1 of 0 1, c3 of 0 1, ..
     const P even01 = CONTACTLAB_SHUFFLE(q[0], q[1], kEven);
     const P odd01 = CONTACTLAB_SHUFFLE(q[0], q[1], kOdd);
@@ -314,6 +312,18 @@ template <class P = LanePart, class M = MaskPart>
     part_of(c2, 0) = CONTACTLAB_SHUFFLE(even01, even23, kPairHi);
     part_of(c1, 0) = CONTACTLAB_SHUFFLE(odd01, odd23, kPairLo);
     part_of(c3, 0) = CONTACTLAB_SHUFFLE(odd01, odd23, kPairHi);
+  }
+}
+
+template <class P = LanePart, class M = MaskPart>
+[[gnu::always_inline]] inline void top_columns(const Lanes (&r)[8], Lanes& c0, Lanes& c1, Lanes& c2,
+                                               Lanes& c3) {
+  if constexpr (kLaneParts == 1) {
+    constexpr M kTops{4, 5, 6, 7, 12, 13, 14, 15};
+    P q[4];  // the tops of rows p and p + 4, side by side
+    for (int p = 0; p < 4; ++p)
+      q[p] = CONTACTLAB_SHUFFLE(part_of(r[p], 0), part_of(r[p + 4], 0), kTops);
+    columns_of_paired_quarters(q, c0, c1, c2, c3);
   } else {
     Lanes c[8];
     transpose8(r, c);
