@@ -5,7 +5,7 @@
 // page, so every 64-byte access at an index that is a multiple of eight straddled two lines.
 // On the settled 65,536-sphere bed, aligned, the step ran 1.14x as fast with AVX-512 and 1.10x
 // with AVX2; huge pages for its large arrays (the kinematics blocks, the sums, the springs and
-// pair constants) added about 1.1x and 1.03x (docs/dem.md).
+// pair constants) added 1.06x (docs/dem.md).
 #pragma once
 
 #include <cstddef>
