@@ -292,9 +292,6 @@ template <class P, class M>
   }
 }
 
-// Columns 0..3 of the top halves of rows r[0..7] (lanes 4..7 of each). With one register a
-// row, 12 shuffles, not a full transpose's 24 for half of its columns; with several, the
-// transpose of the top registers only (the compiler drops the rest of transpose8).
 // With one register a row: the columns of four quarter-rows laid side by side, q[p] holding
 // row p's four values, then row p + 4's (the tops of a transpose's two halves).
 template <class P = LanePart, class M = MaskPart>
@@ -315,6 +312,9 @@ template <class P = LanePart, class M = MaskPart>
   }
 }
 
+// Columns 0..3 of the top halves of rows r[0..7] (lanes 4..7 of each). With one register a
+// row, 12 shuffles, not a full transpose's 24 for half of its columns; with several, the
+// transpose of the top registers only (the compiler drops the rest of transpose8).
 template <class P = LanePart, class M = MaskPart>
 [[gnu::always_inline]] inline void top_columns(const Lanes (&r)[8], Lanes& c0, Lanes& c1, Lanes& c2,
                                                Lanes& c3) {

@@ -17,8 +17,6 @@
 
 namespace contactlab {
 
-inline constexpr std::size_t kCacheLine = 64;
-
 template <class T>
 struct CacheLineAllocator : HugePageAllocator<T> {
   CacheLineAllocator() = default;

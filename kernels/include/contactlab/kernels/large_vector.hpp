@@ -25,6 +25,8 @@ namespace contactlab {
 // apart: distinct sets of a 16 KiB way. The step is whole 4 KiB pages because offsets within a
 // page cost x86 cores with 4 KiB ways and many of them (a 48 KiB 12-way L1) about 3 % of the
 // paper scene's pair loop (17 lines apart, interleaved against no offsets, 1 and 2 threads).
+inline constexpr std::size_t kCacheLine = 64;  // bytes
+
 namespace large_vector_detail {
 inline constexpr std::size_t kHugePage = std::size_t{2} << 20;
 inline constexpr std::size_t kColourStep = std::size_t{4096};  // bytes
@@ -46,11 +48,11 @@ struct HugePageAllocator {
   HugePageAllocator(const HugePageAllocator<U>&) noexcept {}
 
   T* allocate(std::size_t n) {
-    static_assert(alignof(T) <= 64, "colour offsets and small blocks keep 64-byte alignment only");
+    static_assert(alignof(T) <= kCacheLine, "colours and small blocks keep a cache line only");
     const std::size_t bytes = n * sizeof(T);
     if (bytes < kHugePage) {  // on a cache line, as the colours keep it
-      if (void* p = std::aligned_alloc(64, (bytes + 63) / 64 * 64 + (bytes == 0 ? 64 : 0)))
-        return static_cast<T*>(p);
+      const std::size_t lines = bytes == 0 ? 1 : (bytes + kCacheLine - 1) / kCacheLine;
+      if (void* p = std::aligned_alloc(kCacheLine, lines * kCacheLine)) return static_cast<T*>(p);
       throw std::bad_alloc();
     }
     const std::size_t offset = large_vector_detail::next_colour_offset();
