@@ -1,5 +1,6 @@
 // The pair kernel (private to the engine, src/pair_block.hpp): eight pairs at a time (both
-// kin blocks transposed, the law on lanes, outputs transposed into records) gives every record,
+// kin blocks transposed, the law on lanes, outputs transposed into records), and with AVX-512
+// two such groups through the law at once (lane_pair.hpp), gives every record,
 // rolling torque, spring and overlap count bit for bit what one pair at a time gives, periodic
 // images (alone or mixed with plain pairs in a group of eight), touching, slipping and apart
 // pairs, and ragged tails included; the engine's thread-count determinism rests on it (block
@@ -136,9 +137,10 @@ void expect_rows_match_one_by_one(std::size_t first, std::size_t last, SpringsTo
 }
 
 TEST(DemPairBlock, EightAtATimeMatchesOneByOne) {
-  // Whole list, and ranges whose pair counts leave every remainder modulo eight.
+  // Whole list, and ranges whose pair counts leave every remainder modulo sixteen (two groups
+  // at once, then one, then pairs one by one).
   expect_rows_match_one_by_one<false>(0, 300, SpringsTo::kList);
-  for (std::size_t last = 40; last < 56; ++last)
+  for (std::size_t last = 40; last < 72; ++last)
     expect_rows_match_one_by_one<false>(37, last, SpringsTo::kList);
   expect_rows_match_one_by_one<false>(11, 290, SpringsTo::kNext);
 }

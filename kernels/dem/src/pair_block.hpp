@@ -1,7 +1,8 @@
 // The DEM pair kernel (private to src/): a block of the neighbour list through the contact
 // law eight pairs at a time in registers (both particles' kin blocks loaded and transposed,
-// the law on SIMD lanes, its outputs transposed into one record per pair), the last few
-// pairs one by one with the same law on doubles.
+// the law on SIMD lanes, its outputs transposed into one record per pair; with AVX-512 two
+// such groups at once, as two chains: lane_pair.hpp), the last few pairs one by one with the
+// same law on doubles.
 // Compiled once per instruction set (dem_isa.hpp): a toggle, no include guard.
 
 #include <algorithm>
@@ -14,6 +15,7 @@
 #include "contactlab/dem/pair_list.hpp"
 #include "dem_isa.hpp"
 #include "kin_columns.hpp"
+#include "lane_pair.hpp"
 #include "lanes.hpp"
 
 #if defined(CONTACTLAB_DEM_PAIR_BLOCK_TOGGLE) == defined(CONTACTLAB_DEM_ISA_TOGGLE)
@@ -35,8 +37,12 @@ constexpr std::size_t kKinStride = 12;
 // Per particle, kAccStride doubles, summed in pair order by the force pass: force [N],
 // torque [N m], touching contacts.
 constexpr std::size_t kAccStride = 8;
-// How many pairs ahead the pair kernel prefetches its partner's data.
-constexpr std::size_t kPartnerAhead = 8;
+// How many pairs ahead the pair kernel prefetches its partners' data (8, one group, was 3 %
+// slower on the bed: the partners arrived late).
+constexpr std::size_t kPartnerAhead = 32;
+// Whether the pair kernel puts two groups of eight pairs through the law at once (lane_pair.hpp):
+// where a register holds eight doubles.
+constexpr bool kTwoGroups = kLaneParts == 1;
 
 // 1 / k_t of a contact of reduced mass m_star [kg] (0 where k_t is 0): per pair it is a
 // constant of the list (PairList::inv_kt), per wall contact computed on the spot.
@@ -105,6 +111,32 @@ template <class V>
 struct PairOutputs {
   V fx, fy, fz, cx, cy, cz, touch, flag, roll_x, roll_y, roll_z;
 };
+
+// Two groups' inputs as one value of the law, and one group's outputs (TwoGroups::a or ::b).
+// clang-format off
+[[gnu::always_inline]] inline PairInputs<TwoGroups> side_by_side(const PairInputs<Lanes>& a,
+                                                                 const PairInputs<Lanes>& b) {
+  PairInputs<TwoGroups> r;
+#define CONTACTLAB_FIELD(f) r.f = {a.f, b.f};
+  CONTACTLAB_FIELD(dx) CONTACTLAB_FIELD(dy) CONTACTLAB_FIELD(dz) CONTACTLAB_FIELD(rr)
+  CONTACTLAB_FIELD(rmin) CONTACTLAB_FIELD(dvx) CONTACTLAB_FIELD(dvy) CONTACTLAB_FIELD(dvz)
+  CONTACTLAB_FIELD(sx) CONTACTLAB_FIELD(sy) CONTACTLAB_FIELD(sz) CONTACTLAB_FIELD(dwx)
+  CONTACTLAB_FIELD(dwy) CONTACTLAB_FIELD(dwz) CONTACTLAB_FIELD(rprod) CONTACTLAB_FIELD(m_star)
+  CONTACTLAB_FIELD(inv_kt) CONTACTLAB_FIELD(hx) CONTACTLAB_FIELD(hy) CONTACTLAB_FIELD(hz)
+#undef CONTACTLAB_FIELD
+  return r;
+}
+[[gnu::always_inline]] inline PairOutputs<Lanes> group_of(const PairOutputs<TwoGroups>& o,
+                                                          Lanes TwoGroups::*group) {
+  PairOutputs<Lanes> r;
+#define CONTACTLAB_FIELD(f) r.f = o.f.*group;
+  CONTACTLAB_FIELD(fx) CONTACTLAB_FIELD(fy) CONTACTLAB_FIELD(fz) CONTACTLAB_FIELD(cx)
+  CONTACTLAB_FIELD(cy) CONTACTLAB_FIELD(cz) CONTACTLAB_FIELD(touch) CONTACTLAB_FIELD(flag)
+  CONTACTLAB_FIELD(roll_x) CONTACTLAB_FIELD(roll_y) CONTACTLAB_FIELD(roll_z)
+#undef CONTACTLAB_FIELD
+  return r;
+}
+// clang-format on
 
 // The contact law on one pair or eight (outputs zero while apart). With -ffp-contract=off a
 // lane computes exactly what the one-pair form computes, so where a block boundary falls (it
@@ -325,17 +357,21 @@ inline void pair_rows(const double* kin, PairList& q, const PairCoefficients& c,
   double* hx_out = (springs == SpringsTo::kNext ? q.hx_next : q.hx).data();
   double* hy_out = (springs == SpringsTo::kNext ? q.hy_next : q.hy).data();
   double* hz_out = (springs == SpringsTo::kNext ? q.hz_next : q.hz).data();
-  std::size_t k = k0;
-  for (; k + kLanes <= k1; k += kLanes) {
-    // Partners lie up to max_span particles back (L2 or beyond, out of reach of the hardware
-    // prefetcher): fetch the next eight partners' kin blocks and sums.
-    for (std::size_t a = k + kPartnerAhead; a < std::min(k + kPartnerAhead + kLanes, q.j.size());
+  // Three steps of a group, each inlined by force: called from two loops, they were calls, the
+  // inputs went through memory, and the step ran at 0.7 of its speed.
+  // Partners lie up to max_span particles back (L2 or beyond, out of reach of the hardware
+  // prefetcher): the kin blocks and sums of those of pairs [k, k + count) + kPartnerAhead.
+  auto prefetch_partners = [&](std::size_t k, std::size_t count) __attribute__((always_inline)) {
+    for (std::size_t a = k + kPartnerAhead; a < std::min(k + kPartnerAhead + count, q.j.size());
          ++a) {
       const std::size_t ahead = q.j[a];
       __builtin_prefetch(kin + kKinStride * ahead);
       __builtin_prefetch(kin + kKinStride * ahead + kKinStride - 1);
       __builtin_prefetch(acc + kAccStride * ahead, 1);
     }
+  };
+  // Pairs [k, k + 8): their inputs, and where their springs and records go.
+  auto pack_group = [&](std::size_t k) __attribute__((always_inline)) {
     PairInputs<Lanes> in =
         pack_eight<kRolling>(kin, q, q.i.data() + k, q.j.data() + k, q.image.data() + k);
     in.m_star = load_lanes(q.m_star.data() + k);
@@ -343,11 +379,30 @@ inline void pair_rows(const double* kin, PairList& q, const PairCoefficients& c,
     in.hx = load_lanes(q.hx.data() + k);
     in.hy = load_lanes(q.hy.data() + k);
     in.hz = load_lanes(q.hz.data() + k);
-    const PairOutputs<Lanes> out = pair_law<kRolling, kClamp>(c, dt, in);
-    store_lanes(hx_out + k, in.hx);
-    store_lanes(hy_out + k, in.hy);
-    store_lanes(hz_out + k, in.hz);
+    return in;
+  };
+  auto store_group = [&](std::size_t k, const Lanes& hx, const Lanes& hy, const Lanes& hz,
+                         const PairOutputs<Lanes>& out) __attribute__((always_inline)) {
+    store_lanes(hx_out + k, hx);
+    store_lanes(hy_out + k, hy);
+    store_lanes(hz_out + k, hz);
     store_outputs<kRolling>(blk, k - k0, out, true, k0, large, bad);
+  };
+  std::size_t k = k0;
+  if constexpr (kTwoGroups) {
+    for (; k + 2 * kLanes <= k1; k += 2 * kLanes) {
+      prefetch_partners(k, 2 * kLanes);
+      PairInputs<TwoGroups> in = side_by_side(pack_group(k), pack_group(k + kLanes));
+      const PairOutputs<TwoGroups> out = pair_law<kRolling, kClamp>(c, dt, in);
+      store_group(k, in.hx.a, in.hy.a, in.hz.a, group_of(out, &TwoGroups::a));
+      store_group(k + kLanes, in.hx.b, in.hy.b, in.hz.b, group_of(out, &TwoGroups::b));
+    }
+  }
+  for (; k + kLanes <= k1; k += kLanes) {
+    prefetch_partners(k, kLanes);
+    PairInputs<Lanes> in = pack_group(k);
+    const PairOutputs<Lanes> out = pair_law<kRolling, kClamp>(c, dt, in);
+    store_group(k, in.hx, in.hy, in.hz, out);
   }
   for (; k < k1; ++k) {
     PairInputs<double> in = pack_one<kRolling>(kin, q, k);
