@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "contactlab/dem/force_variant.hpp"  // kRowsPerBlock
 #include "dem_isa.hpp"
 #include "lanes.hpp"
 #include "pair_block.hpp"

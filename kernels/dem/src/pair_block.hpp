@@ -11,7 +11,6 @@
 #include <vector>
 
 #include "contactlab/dem/contact_law.hpp"
-#include "contactlab/dem/force_variant.hpp"  // kRowsPerBlock
 #include "contactlab/dem/pair_list.hpp"
 #include "dem_isa.hpp"
 #include "kin_columns.hpp"
