@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <span>
 #include <vector>
 
 #include "contactlab/dem/force_variant.hpp"  // kRowsPerBlock
@@ -169,10 +170,13 @@ inline void accumulate_deferred(const double* kin, const PairList& q, std::size_
   }
 }
 
-// Where thread t of `threads` begins its rows, and its particles in the drift: n t / T rounded
-// down to a whole lane group, so that every thread's eight-lane loads and stores of the
-// particle arrays start on a cache line (AlignedVector). Where a range starts changes no bit.
-inline std::size_t range_begin(std::size_t n, std::size_t t, std::size_t threads) {
+// Where thread t of `threads` begins its rows, and its particles in the drift: from `bounds`
+// (RowRanges: threads + 1 starts, each a whole lane group, so that every thread's eight-lane
+// loads and stores of the particle arrays start on a cache line) where it has one per thread,
+// else n t / T rounded down to a whole lane group. Where a range starts changes no bit.
+inline std::size_t range_begin(std::span<const std::size_t> bounds, std::size_t n, std::size_t t,
+                               std::size_t threads) {
+  if (bounds.size() == threads + 1 && bounds.back() == n) return bounds[t];
   return t >= threads ? n : n * t / threads / kLanes * kLanes;
 }
 
@@ -183,24 +187,29 @@ inline std::size_t range_begin(std::size_t n, std::size_t t, std::size_t threads
 // the finish's clock reads, the sums' setup) weigh more than its records' staying in L1.
 constexpr std::size_t kOrderedBlockRows = 512;
 
-// The force pass: each thread takes a contiguous range of rows [b, e), computes them a block
-// at a time (pair_rows, accumulate_ordered) and
-// finishes particles [a, z) (finish(a, z, with_walls, large, bad_wall): walls unless serial_walls,
-// when walls(0, n, ...) adds them for every particle in one thread first; gravity, kick) as soon as
-// the rows holding its j sides, (a, a + lag], are done; lag = max_span finishes particles while
-// their sums are still in cache (fused), lag = n finishes every particle after the barrier (split:
-// the pair phase timed alone). mark(phase) is called by every thread where a phase ends (after the
-// pairs, the j sides from other threads, the serial walls). The last max_span particles of a range
-// wait for the next range's rows, after a barrier. A particle's sums do not depend on when it is
-// finished, so the result is the same for any thread count.
-template <bool kRolling, bool kClamp, class Finish, class Walls, class Mark>
+// The force pass: each thread takes a contiguous range of rows [b, e) (range_begin), computes them
+// a block at a time (pair_rows, accumulate_ordered) and finishes particles [a, z) (finish(a, z,
+// with_walls, large, bad_wall): walls unless serial_walls, when walls(0, n, ...) adds them for
+// every particle in one thread first; gravity, kick) as soon as the rows holding its j sides, (a, a
+// + lag], are done; lag = max_span finishes particles while their sums are still in cache (fused),
+// lag = n finishes every particle after the barrier (split: the pair phase timed alone).
+// mark(phase) is called by every thread where a phase ends (after the pairs, the j sides from other
+// threads, the serial walls). The last max_span particles of a range wait for the next range's
+// rows, after a barrier. A particle's sums do not depend on when it is finished, so the result is
+// the same for any thread count and any ranges. With more than one thread each reports busy(t,
+// seconds) on its own range (its pairs, the j sides left to it and its finish; not the barriers'
+// waits nor the serial walls), for RowRanges to even out.
+template <bool kRolling, bool kClamp, class Finish, class Walls, class Mark, class Busy>
 void force_pass(const double* kin, std::size_t n, PairList& q, const PairCoefficients& c, double dt,
-                bool fused, bool serial_walls, double* acc, std::vector<double>& scratch,
-                Finish& finish, Walls& walls, Mark& mark, std::uint64_t& large,
-                std::uint32_t& bad_pair, std::uint32_t& bad_wall) {
+                bool fused, bool serial_walls, std::span<const std::size_t> bounds, double* acc,
+                std::vector<double>& scratch, Finish& finish, Walls& walls, Mark& mark, Busy& busy,
+                std::uint64_t& large, std::uint32_t& bad_pair, std::uint32_t& bad_wall) {
   const auto t = static_cast<std::size_t>(omp_get_thread_num());
   const auto threads = static_cast<std::size_t>(omp_get_num_threads());
-  const std::size_t b = range_begin(n, t, threads), e = range_begin(n, t + 1, threads);
+  const std::size_t b = range_begin(bounds, n, t, threads);
+  const std::size_t e = range_begin(bounds, n, t + 1, threads);
+  const bool timed = threads > 1;
+  const double start_s = timed ? omp_get_wtime() : 0.0;
   const std::size_t lag = fused ? q.max_span : n;
   std::uint64_t large_here = 0;
   std::uint32_t bad_here = UINT32_MAX, bad_wall_here = UINT32_MAX;
@@ -219,13 +228,16 @@ void force_pass(const double* kin, std::size_t n, PairList& q, const PairCoeffic
   // The pairs' failures before the barrier: a finish after it knows whether any pair failed.
   combine_counts(large_here, bad_here, large, bad_pair);
   large_here = 0;
+  double busy_s = timed ? omp_get_wtime() - start_s : 0.0;
 #pragma omp barrier
   mark(Phase::kPairs);
+  const double resume_s = timed ? omp_get_wtime() : 0.0;
   // The particles a later thread may have left j sides for: none after the last range (at one
   // thread, none at all; scanning their j lists anyway cost the step 0.4 %).
   const std::size_t deferred_begin =
       t + 1 < threads ? std::max(next, e > q.max_span ? e - q.max_span : 0) : e;
   for (std::size_t a = deferred_begin; a < e; ++a) accumulate_deferred<kRolling>(kin, q, a, e, acc);
+  busy_s += timed ? omp_get_wtime() - resume_s : 0.0;
   mark(Phase::kReduction);
   if (serial_walls) {  // every particle's pairs are in (fused is off: no one finished yet)
 #pragma omp barrier
@@ -233,8 +245,10 @@ void force_pass(const double* kin, std::size_t n, PairList& q, const PairCoeffic
     walls(0, n, large_here, bad_wall_here);
     mark(Phase::kWalls);
   }
+  const double finish_s = timed ? omp_get_wtime() : 0.0;
   if (next < e) finish(next, e, !serial_walls, large_here, bad_wall_here);
   combine_counts(large_here, bad_wall_here, large, bad_wall);
+  if (timed) busy(t, busy_s + (omp_get_wtime() - finish_s));
 }
 
 // body(first, last) for the particles [first, last) of each block of kRowsPerBlock, the

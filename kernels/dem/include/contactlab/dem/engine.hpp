@@ -15,6 +15,7 @@
 #include "contactlab/dem/halo.hpp"
 #include "contactlab/dem/pair_list.hpp"
 #include "contactlab/dem/particles.hpp"
+#include "contactlab/dem/row_ranges.hpp"
 #include "contactlab/dem/walls.hpp"
 
 namespace contactlab::dem {
@@ -272,6 +273,7 @@ class Engine {
   AlignedVector<double> acc_;  // per particle: the force pass's pair sums (detail::kAccStride)
   std::vector<std::vector<double>> block_scratch_;  // per thread: the force pass's pair block
   std::vector<AlignedVector<double>> thread_acc_;   // per thread: sums (per-thread accumulation)
+  RowRanges row_ranges_;  // the ordered pass's range per thread, by the threads' speeds
 };
 
 }  // namespace contactlab::dem
