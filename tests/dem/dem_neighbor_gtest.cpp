@@ -48,7 +48,7 @@ TEST(DemNeighborList, EqualsBruteForceWithPeriodicImages) {
   const std::set<Key> expected = brute_force(particles, settings.domain, skin);
   NeighborBuilder builder;
   PairList pairs;
-  builder.rebuild(particles, pairs, settings.domain, skin, false);
+  builder.rebuild(particles, pairs, settings.domain, skin);
   std::set<Key> got;
   for (std::size_t k = 0; k < pairs.size(); ++k) {
     const std::uint32_t a = particles.id[pairs.i[k]], b = particles.id[pairs.j[k]];
@@ -115,7 +115,7 @@ TEST(DemNeighborList, HistoryFollowsItsPairThroughAReorder) {
   const double skin = 5e-4;
   NeighborBuilder builder;
   PairList pairs;
-  builder.rebuild(particles, pairs, settings.domain, skin, false);
+  builder.rebuild(particles, pairs, settings.domain, skin);
   ASSERT_GT(pairs.size(), 10u);
   // A spring per pair that encodes its ids: seen from the lower id it is (lo - hi, lo, hi)
   // x 1e-9; seen from i it is that times sign (+1 when id_i < id_j).
@@ -136,7 +136,7 @@ TEST(DemNeighborList, HistoryFollowsItsPairThroughAReorder) {
     particles.x[k] = 0.01 - particles.x[k] + 1e-9;
     particles.y[k] += 0.005;
   }
-  const RebuildStats stats = builder.rebuild(particles, pairs, settings.domain, skin, false);
+  const RebuildStats stats = builder.rebuild(particles, pairs, settings.domain, skin);
   EXPECT_EQ(pairs.size(), before);
   EXPECT_EQ(stats.carried_contacts, before);
   for (std::size_t k = 0; k < pairs.size(); ++k) {

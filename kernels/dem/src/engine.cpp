@@ -224,11 +224,10 @@ void Engine::rebuild() {
   check_containment();      // this process's own particles, once the sink has taken its
   if (halo_ != nullptr) {
     halo_->exchange_particles(particles_, carried_);
-    builder_.rebuild(particles_, pairs_, settings_.domain, settings_.skin,
-                     coefficients_.mu_roll > 0, settings_.threads, halo_, &carried_);
+    builder_.rebuild(particles_, pairs_, settings_.domain, settings_.skin, settings_.threads, halo_,
+                     &carried_);
   } else if (!particles_.id.empty()) {
-    builder_.rebuild(particles_, pairs_, settings_.domain, settings_.skin,
-                     coefficients_.mu_roll > 0, settings_.threads);
+    builder_.rebuild(particles_, pairs_, settings_.domain, settings_.skin, settings_.threads);
   }
   ++rebuilds_;
   index_ids();

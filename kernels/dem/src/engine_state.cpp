@@ -94,7 +94,7 @@ void Engine::restore(const State& state, Particles particles, PairList pairs) {
   const auto shift = pairs_.shift;
   pairs_ = std::move(pairs);
   pairs_.shift = shift;
-  pairs_.resize(pairs_.i.size(), coefficients_.mu_roll > 0);
+  pairs_.resize(pairs_.i.size());
   pairs_.build_csr(particles_.size());
   index_ids();
   // (the next step predicts every velocity again before it computes forces)

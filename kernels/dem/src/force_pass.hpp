@@ -119,23 +119,34 @@ inline void assign_rows(const PairList& q, std::size_t first, std::size_t last, 
 
 // The ordered pass's sums: each row summed in registers and stored to its particle (nothing
 // reached it before: its j sides come from later rows), then each j side subtracted from j's
-// sum when this thread owns j (j >= own_begin); otherwise the record is kept in q.out /
-// q.roll_* for j's owner, which adds it after the barrier (they come from later rows, so
-// pair order still holds). Particle a's sum is therefore its own row, then its j sides in
-// pair order, whatever the thread count.
-template <bool kRolling>
+// sum when this thread owns j (j >= own_begin); otherwise it is appended, in pair order, to
+// left_for(j): the sides for j's owner, which adds them after the barrier (they come from later
+// rows, so pair order still holds). Particle a's sum is therefore its own row, then its j sides
+// in pair order, whatever the thread count and ranges.
+template <bool kRolling, class LeftFor>
 inline void accumulate_ordered(const double* kin, PairList& q, std::size_t first, std::size_t last,
-                               PairBlock& blk, std::size_t own_begin, double* acc) {
-  static_assert(PairList::kOutStride == kLanes && kAccStride == kLanes);
+                               PairBlock& blk, std::size_t own_begin, double* acc,
+                               LeftFor&& left_for) {
+  static_assert(LeftJSides::kRecordDoubles == kLanes && kAccStride == kLanes);
+  // Out of line: inlined, its state took registers from the loop around it (the one-thread
+  // step, which never leaves a side, ran 2 - 3 % slower).
+  auto leave = [&](std::uint32_t j, const double* p, const double* const* roll, std::size_t b)
+      __attribute__((noinline)) {
+    LeftJSides& left = left_for(j);
+    left.reserve_one(kRolling);
+    const std::size_t at = left.count++;
+    store_lanes(left.records.data() + kLanes * at, load_lanes(p));
+    left.j[at] = j;
+    if constexpr (kRolling) {
+      left.roll_x[at] = roll[0][b];
+      left.roll_y[at] = roll[1][b];
+      left.roll_z[at] = roll[2][b];
+    }
+  };
   auto j_side = [&](const double* p, const double* const* roll, std::size_t k, std::size_t b) {
     const std::uint32_t j = q.j[k];
-    if (j < own_begin) {  // another thread's particle: left for its owner
-      store_lanes(&q.out[kLanes * k], load_lanes(p));
-      if constexpr (kRolling) {
-        q.roll_x[k] = roll[0][b];
-        q.roll_y[k] = roll[1][b];
-        q.roll_z[k] = roll[2][b];
-      }
+    if (j < own_begin) [[unlikely]] {  // another thread's particle: left for its owner
+      leave(j, p, roll, b);
       return;
     }
     subtract_j_side<kRolling>(acc + kAccStride * j, p, kin[kKinStride * j + 3], roll, b);
@@ -143,30 +154,14 @@ inline void accumulate_ordered(const double* kin, PairList& q, std::size_t first
   assign_rows<kRolling>(q, first, last, blk, kin, acc, j_side);
 }
 
-// Adds to particle a's sum the j sides that later threads left in q.out (pairs from rows at
-// or after own_end), in pair order.
+// The j sides a later thread left (accumulate_ordered), subtracted in the order they were left.
 template <bool kRolling>
-inline void accumulate_deferred(const double* kin, const PairList& q, std::size_t a,
-                                std::size_t own_end, double* acc) {
-  constexpr std::size_t kOut = PairList::kOutStride;
-  const double r = kin[kKinStride * a + 3];
-  double* aa = acc + kAccStride * a;
-  for (std::size_t e = q.j_offsets[a]; e < q.j_offsets[a + 1]; ++e) {
-    const std::uint32_t k = q.j_pairs[e];
-    if (q.i[k] < own_end) continue;  // added directly
-    const double* o = &q.out[kOut * k];
-    aa[0] -= o[0];
-    aa[1] -= o[1];
-    aa[2] -= o[2];
-    aa[3] -= r * o[3];
-    aa[4] -= r * o[4];
-    aa[5] -= r * o[5];
-    aa[6] += o[6];
-    if constexpr (kRolling) {
-      aa[3] -= q.roll_x[k];
-      aa[4] -= q.roll_y[k];
-      aa[5] -= q.roll_z[k];
-    }
+inline void add_left_sides(const double* kin, const LeftJSides& left, double* acc) {
+  const double* roll[3] = {left.roll_x.data(), left.roll_y.data(), left.roll_z.data()};
+  for (std::size_t at = 0; at < left.count; ++at) {
+    const std::uint32_t j = left.j[at];
+    subtract_j_side<kRolling>(acc + kAccStride * j, left.records.data() + kLanes * at,
+                              kin[kKinStride * j + 3], roll, at);
   }
 }
 
@@ -202,12 +197,21 @@ constexpr std::size_t kOrderedBlockRows = 512;
 template <bool kRolling, bool kClamp, class Finish, class Walls, class Mark, class Busy>
 void force_pass(const double* kin, std::size_t n, PairList& q, const PairCoefficients& c, double dt,
                 bool fused, bool serial_walls, std::span<const std::size_t> bounds, double* acc,
-                std::vector<double>& scratch, Finish& finish, Walls& walls, Mark& mark, Busy& busy,
-                std::uint64_t& large, std::uint32_t& bad_pair, std::uint32_t& bad_wall) {
+                std::vector<double>& scratch, std::span<LeftJSides> left, Finish& finish,
+                Walls& walls, Mark& mark, Busy& busy, std::uint64_t& large, std::uint32_t& bad_pair,
+                std::uint32_t& bad_wall) {
   const auto t = static_cast<std::size_t>(omp_get_thread_num());
   const auto threads = static_cast<std::size_t>(omp_get_num_threads());
   const std::size_t b = range_begin(bounds, n, t, threads);
   const std::size_t e = range_begin(bounds, n, t + 1, threads);
+  // left[from * threads + owner]: the j sides thread `from` leaves for `owner` (threads^2 lists,
+  // the caller's, kept from step to step); this thread's own were read in the last step.
+  for (std::size_t owner = 0; owner < t; ++owner) left[t * threads + owner].count = 0;
+  auto left_for = [&](std::uint32_t j) -> LeftJSides& {
+    std::size_t owner = t - 1;  // j < b: an earlier thread's, mostly the one just before
+    while (j < range_begin(bounds, n, owner, threads)) --owner;
+    return left[t * threads + owner];
+  };
   const bool timed = threads > 1;
   const double start_s = timed ? omp_get_wtime() : 0.0;
   const std::size_t lag = fused ? q.max_span : n;
@@ -219,7 +223,7 @@ void force_pass(const double* kin, std::size_t n, PairList& q, const PairCoeffic
     const std::size_t last = std::min(e, first + kOrderedBlockRows);
     pair_rows<kRolling, kClamp>(kin, q, c, dt, first, last, SpringsTo::kList, blk, acc, large_here,
                                 bad_here);
-    accumulate_ordered<kRolling>(kin, q, first, last, blk, b, acc);
+    accumulate_ordered<kRolling>(kin, q, first, last, blk, b, acc, left_for);
     if (next + lag < last) {
       finish(next, last - lag, true, large_here, bad_wall_here);
       next = last - lag;
@@ -232,11 +236,11 @@ void force_pass(const double* kin, std::size_t n, PairList& q, const PairCoeffic
 #pragma omp barrier
   mark(Phase::kPairs);
   const double resume_s = timed ? omp_get_wtime() : 0.0;
-  // The particles a later thread may have left j sides for: none after the last range (at one
-  // thread, none at all; scanning their j lists anyway cost the step 0.4 %).
-  const std::size_t deferred_begin =
-      t + 1 < threads ? std::max(next, e > q.max_span ? e - q.max_span : 0) : e;
-  for (std::size_t a = deferred_begin; a < e; ++a) accumulate_deferred<kRolling>(kin, q, a, e, acc);
+  // The j sides later threads left, in their order (their rows' order): none from a particle
+  // finished above, whose j sides all came from this thread's rows.
+  for (std::size_t from = t + 1; from < threads; ++from) {
+    add_left_sides<kRolling>(kin, left[from * threads + t], acc);
+  }
   busy_s += timed ? omp_get_wtime() - resume_s : 0.0;
   mark(Phase::kReduction);
   if (serial_walls) {  // every particle's pairs are in (fused is off: no one finished yet)

@@ -10,22 +10,18 @@
 
 namespace contactlab::dem {
 
-void PairList::resize_to_overwrite(std::size_t n, bool rolling) {
+void PairList::resize_to_overwrite(std::size_t n) {
   dem::resize_to_overwrite(i, n);
   dem::resize_to_overwrite(j, n);
   dem::resize_to_overwrite(image, n);
   for (auto* v : {&hx, &hy, &hz}) dem::resize_to_overwrite(*v, n);
-  dem::resize_to_overwrite(out, kOutStride * n);
-  for (auto* v : {&roll_x, &roll_y, &roll_z}) dem::resize_to_overwrite(*v, rolling ? n : 0);
 }
 
-void PairList::resize(std::size_t n, bool rolling) {
+void PairList::resize(std::size_t n) {
   i.resize(n);
   j.resize(n);
   image.resize(n);
   for (auto* v : {&hx, &hy, &hz}) v->resize(n);
-  out.resize(kOutStride * n);
-  for (auto* v : {&roll_x, &roll_y, &roll_z}) v->resize(rolling ? n : 0);
 }
 
 namespace {

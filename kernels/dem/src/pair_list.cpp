@@ -52,7 +52,7 @@ void collect_springs(const Particles& p, const PairList& pairs, CarriedSprings& 
 }
 
 RebuildStats NeighborBuilder::rebuild(Particles& p, PairList& pairs, const Domain& domain,
-                                      double skin, bool rolling, int threads, RankAgreement* ranks,
+                                      double skin, int threads, RankAgreement* ranks,
                                       CarriedSprings* carried) {
   const std::size_t n = p.size();
   RebuildStats stats;
@@ -250,7 +250,7 @@ RebuildStats NeighborBuilder::rebuild(Particles& p, PairList& pairs, const Domai
   pair_start_[0] = 0;
   parallel_inclusive_scan(pair_start_.data() + 1, n, threads, range_sums_);
   const std::size_t count = pair_start_[n];
-  pairs.resize_to_overwrite(count, rolling);
+  pairs.resize_to_overwrite(count);
 #pragma omp parallel for schedule(static) num_threads(threads)
   for (std::size_t a = 0; a < n; ++a) {
     const std::uint32_t row = row_order_[a];

@@ -58,7 +58,7 @@ void Engine::remove_sunk_particles() {
     q.hz[m] = q.hz[k];
     ++m;
   }
-  q.resize(m, coefficients_.mu_roll > 0);
+  q.resize(m);
   if (kept == 0) q.build_csr(0);  // no rebuild follows: the empty list must be consistent
 }
 

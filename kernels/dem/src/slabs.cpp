@@ -171,7 +171,7 @@ SlabPlan plan_slabs(const Particles& particles, const EngineSettings& settings, 
   Particles ordered = particles;  // the list reorders them
   PairList pairs;
   NeighborBuilder builder;
-  builder.rebuild(ordered, pairs, settings.domain, skin, false, settings.threads);
+  builder.rebuild(ordered, pairs, settings.domain, skin, settings.threads);
   return plan_slabs(ordered, pairs, settings, ranks, axis);
 }
 

@@ -29,7 +29,7 @@ std::pair<EngineSettings, Particles> column() {
 PairList list_of(Particles& p, const EngineSettings& s) {
   PairList pairs;
   NeighborBuilder builder;
-  builder.rebuild(p, pairs, s.domain, s.skin, false, 1);
+  builder.rebuild(p, pairs, s.domain, s.skin, 1);
   return pairs;
 }
 

@@ -49,8 +49,7 @@ void write_checkpoint(MPI_Comm comm, const Engine& engine, const HaloExchange& h
     PairList pairs;
     NeighborBuilder builder;
     const EngineSettings& settings = engine.settings();
-    builder.rebuild(then, pairs, settings.domain, settings.skin, engine.coefficients().mu_roll > 0,
-                    settings.threads);
+    builder.rebuild(then, pairs, settings.domain, settings.skin, settings.threads);
     std::unordered_map<std::uint32_t, std::uint32_t> index_of;
     for (std::size_t a = 0; a < gathered.size(); ++a) {
       index_of.emplace(gathered.id[a], static_cast<std::uint32_t>(a));

@@ -108,7 +108,7 @@ void HaloExchange::drop_ghosts(Particles& particles, PairList& pairs, CarriedSpr
     for (std::size_t a = 0; a < keep.size(); ++a) keep[a] = ghost_[a] == 0 ? 1 : 0;
     keep_particles(particles, keep);
   }
-  pairs.resize(0, !pairs.roll_x.empty());
+  pairs.resize(0);
   ghost_.assign(particles.size(), 0);
   owned_ = particles.size();
 }

@@ -274,6 +274,8 @@ class Engine {
   std::vector<std::vector<double>> block_scratch_;  // per thread: the force pass's pair block
   std::vector<AlignedVector<double>> thread_acc_;   // per thread: sums (per-thread accumulation)
   RowRanges row_ranges_;  // the ordered pass's range per thread, by the threads' speeds
+  // The ordered pass's j sides for other threads' particles: threads x threads lists.
+  std::vector<LeftJSides> left_j_sides_;
 };
 
 }  // namespace contactlab::dem

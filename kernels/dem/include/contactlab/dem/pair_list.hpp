@@ -4,6 +4,7 @@
 // sorted-key merge.
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <vector>
@@ -65,17 +66,6 @@ struct PairList {
   // whenever the list is built or restored (Engine::index_pair_constants), not saved: the
   // force pass streams them instead of dividing per pair per step.
   AlignedVector<double> m_star, inv_kt;
-  // Per pair, in pair order, written by the force pass (zero while apart), kOutStride doubles
-  // a pair, one cache line: the force on i [N] (j gets minus it), n x F_t [N] (i's torque is
-  // -r_i times it, j's -r_j times it), 1 if touching (else 0), the overlap flag (not read here).
-  // With rolling resistance, roll_*: the rolling torque on i [N m] (j gets minus it). A particle's
-  // gather reads its own row's run and its j sides through j_pairs, in a fixed order.
-  // Only the pairs whose j another thread owns are written, and read after: LargeVectors, never
-  // zeroed, so that the pages of the rest are not touched at all (at one thread, none; the 64
-  // bytes a pair of the settled bed's 245,000 pairs are 16 MB, which zeroed took 40 ms of page
-  // faults on the 2-core VM whenever the list outgrew them).
-  static constexpr std::size_t kOutStride = 8;
-  LargeVector<double> out, roll_x, roll_y, roll_z;
   // Pairs run from the later particle to the earlier (j < i) and are grouped by i, ascending:
   // particle a's own pairs are [rows[a], rows[a + 1]). The pairs where a is the j:
   // j_pairs[j_offsets[a] .. j_offsets[a + 1]), in pair order; they lie in the rows
@@ -85,13 +75,36 @@ struct PairList {
   std::array<std::array<double, 3>, 27> shift{};  // image code -> shift [m]
 
   std::size_t size() const { return i.size(); }
-  void resize(std::size_t n, bool rolling);
+  void resize(std::size_t n);
   // As resize, for a list the caller fills anew (i, j, image, springs; out: the force pass's).
-  void resize_to_overwrite(std::size_t n, bool rolling);
+  void resize_to_overwrite(std::size_t n);
   // Orients (j < i, springs and images follow), groups by i, and indexes rows and j sides, on
   // `threads` threads (the same lists for any count).
   void build_csr(std::size_t particles, int threads, RadixBuffers& buffers);
   void build_csr(std::size_t particles);
+};
+
+// The j sides that one thread's rows of the ordered force pass give particles another thread
+// owns (force_pass.hpp), appended in pair order and added by the owner after the barrier: per
+// pair its record (kRecordDoubles: the force on i [N], j gets minus it; n x F_t [N], j's
+// torque is -r_j times it; 1 if touching; the overlap flag), its j and, with rolling
+// resistance, the rolling torque on i [N m] (j gets minus it). Only these pairs are kept: a
+// thread's range meets the next ones' in about max_span particles, whatever the list's size.
+struct LeftJSides {
+  static constexpr std::size_t kRecordDoubles = 8;
+  AlignedVector<double> records;
+  std::vector<std::uint32_t> j;
+  std::vector<double> roll_x, roll_y, roll_z;
+  std::size_t count = 0;  // the sides held (the arrays only grow, from step to step)
+
+  // Room for one more side: grown by doubling, so appending is amortised O(1).
+  void reserve_one(bool rolling) {
+    if (count < j.size()) return;
+    const std::size_t room = std::max<std::size_t>(64, 2 * j.size());
+    records.resize(kRecordDoubles * room);
+    j.resize(room);
+    for (auto* v : {&roll_x, &roll_y, &roll_z}) v->resize(rolling ? room : 0);
+  }
 };
 
 // Tangential springs by stable-id pair, key = lower id << 32 | higher id, each spring seen from
@@ -142,7 +155,7 @@ class NeighborBuilder {
   // `carried`, its springs are carried instead of the old list's (whose indices may no longer
   // match the particles). Throws InputError if a periodic length is under 3 pair reaches.
   RebuildStats rebuild(Particles& particles, PairList& pairs, const Domain& domain, double skin,
-                       bool rolling, int threads = 1, RankAgreement* ranks = nullptr,
+                       int threads = 1, RankAgreement* ranks = nullptr,
                        CarriedSprings* carried = nullptr);
 
  private:
