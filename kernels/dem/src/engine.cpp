@@ -138,14 +138,17 @@ double Engine::prediction_kick() const {
 
 void Engine::refresh_kinematics(double kick) {
   const Particles& p = particles_;
-  kin_.assign(kKinStride * p.size(), 0.0);
-  for (std::size_t k = 0; k < p.size(); ++k) {
+  const std::size_t n = p.size();
+  kin_.resize(kKinStride * n);  // every double written below, on the engine's threads
+#pragma omp parallel for schedule(static) num_threads(settings_.threads)
+  for (std::size_t k = 0; k < n; ++k) {
     double* kin = &kin_[kKinStride * k];
     kin[0] = p.x[k];
     kin[1] = p.y[k];
     kin[2] = p.z[k];
     kin[3] = p.radius[k];
     kin[7] = p.mass[k];
+    kin[11] = 0.0;
     predict_velocities(p, k, accelerations(p, k), kick, kin);
   }
   index_wall_reach();

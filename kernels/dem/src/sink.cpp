@@ -63,11 +63,21 @@ void Engine::remove_sunk_particles() {
 }
 
 void Engine::index_ids() {
+  // At every rebuild: three passes over the particles, each on the engine's threads (ids are
+  // distinct, so the scatter's writes never meet).
+  const std::vector<std::uint32_t>& ids = particles_.id;
+  const std::size_t n = ids.size();
   std::size_t capacity = index_of_id_.size();
-  for (std::uint32_t id : particles_.id) capacity = std::max<std::size_t>(capacity, id + 1);
-  index_of_id_.assign(capacity, kRemoved);
-  for (std::size_t a = 0; a < particles_.size(); ++a) {
-    index_of_id_[particles_.id[a]] = static_cast<std::uint32_t>(a);
+#pragma omp parallel for schedule(static) num_threads(settings_.threads) reduction(max : capacity)
+  for (std::size_t a = 0; a < n; ++a) capacity = std::max<std::size_t>(capacity, ids[a] + 1);
+  index_of_id_.resize(capacity);
+  std::uint32_t* const index = index_of_id_.data();
+#pragma omp parallel num_threads(settings_.threads)
+  {
+#pragma omp for schedule(static)
+    for (std::size_t id = 0; id < capacity; ++id) index[id] = kRemoved;
+#pragma omp for schedule(static)
+    for (std::size_t a = 0; a < n; ++a) index[ids[a]] = static_cast<std::uint32_t>(a);
   }
 }
 
