@@ -177,9 +177,11 @@ inline std::size_t range_begin(std::span<const std::size_t> bounds, std::size_t 
 
 // Rows per block of the ordered pass. Not kRowsPerBlock: no schedule deals these out (each
 // thread takes one range), and on the bed at one thread blocks of 512 rows ran the step 1.08x
-// (AVX-512) and 1.06x (AVX2) faster than blocks of 64, and 256 about as fast (interleaved, 9 -
-// 13 rounds, three runs): a block's fixed costs (a call of the pair kernel and of the finish,
-// the finish's clock reads, the sums' setup) weigh more than its records' staying in L1.
+// (AVX-512) and 1.06x (AVX2) faster than blocks of 64, 256 about as fast, 1024 and 2048 at 0.98
+// and 0.96 of 512 (interleaved, 9 - 13 rounds, three runs): a block's fixed costs (a call of the
+// pair kernel and of the finish, the finish's clock reads, the sums' setup) weigh more than its
+// records' staying in L1 (sub-blocks of 64 or 128 rows for the pairs and sums inside a block of
+// 512: 0.97 and 1.00).
 constexpr std::size_t kOrderedBlockRows = 512;
 
 // The force pass: each thread takes a contiguous range of rows [b, e) (range_begin), computes them
