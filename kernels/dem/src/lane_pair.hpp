@@ -33,40 +33,36 @@ struct TwoGroups {
   Lanes a, b;
 };
 
-#define CONTACTLAB_TWO_GROUPS_ARITHMETIC(op)                                                    \
-  [[gnu::always_inline]] inline TwoGroups operator op(const TwoGroups& x, const TwoGroups& y) { \
-    return {x.a op y.a, x.b op y.b};                                                            \
-  }                                                                                             \
-  [[gnu::always_inline]] inline TwoGroups operator op(const TwoGroups& x, double y) {           \
-    return {x.a op y, x.b op y};                                                                \
-  }                                                                                             \
-  [[gnu::always_inline]] inline TwoGroups operator op(double x, const TwoGroups& y) {           \
-    return {x op y.a, x op y.b};                                                                \
-  }                                                                                             \
-  [[gnu::always_inline]] inline TwoGroups& operator op##=(TwoGroups& x, const TwoGroups& y) {   \
-    x.a = x.a op y.a;                                                                           \
-    x.b = x.b op y.b;                                                                           \
-    return x;                                                                                   \
+// An operator on both groups: (two groups, two groups) and (two groups, double), giving R.
+#define CONTACTLAB_TWO_GROUPS_BINARY(op, R)                                             \
+  [[gnu::always_inline]] inline R operator op(const TwoGroups& x, const TwoGroups& y) { \
+    return {x.a op y.a, x.b op y.b};                                                    \
+  }                                                                                     \
+  [[gnu::always_inline]] inline R operator op(const TwoGroups& x, double y) {           \
+    return {x.a op y, x.b op y};                                                        \
+  }
+// Arithmetic also takes a double on the left, and has its assignment form.
+#define CONTACTLAB_TWO_GROUPS_ARITHMETIC(op)                                                  \
+  CONTACTLAB_TWO_GROUPS_BINARY(op, TwoGroups)                                                 \
+  [[gnu::always_inline]] inline TwoGroups operator op(double x, const TwoGroups& y) {         \
+    return {x op y.a, x op y.b};                                                              \
+  }                                                                                           \
+  [[gnu::always_inline]] inline TwoGroups& operator op##=(TwoGroups& x, const TwoGroups& y) { \
+    x.a = x.a op y.a;                                                                         \
+    x.b = x.b op y.b;                                                                         \
+    return x;                                                                                 \
   }
 CONTACTLAB_TWO_GROUPS_ARITHMETIC(+)
 CONTACTLAB_TWO_GROUPS_ARITHMETIC(-)
 CONTACTLAB_TWO_GROUPS_ARITHMETIC(*)
 CONTACTLAB_TWO_GROUPS_ARITHMETIC(/)
+CONTACTLAB_TWO_GROUPS_BINARY(<, TwoMasks)
+CONTACTLAB_TWO_GROUPS_BINARY(>, TwoMasks)
+CONTACTLAB_TWO_GROUPS_BINARY(!=, TwoMasks)
 #undef CONTACTLAB_TWO_GROUPS_ARITHMETIC
+#undef CONTACTLAB_TWO_GROUPS_BINARY
 
 [[gnu::always_inline]] inline TwoGroups operator-(const TwoGroups& x) { return {-x.a, -x.b}; }
-
-#define CONTACTLAB_TWO_GROUPS_COMPARISON(op)                                                   \
-  [[gnu::always_inline]] inline TwoMasks operator op(const TwoGroups& x, const TwoGroups& y) { \
-    return {x.a op y.a, x.b op y.b};                                                           \
-  }                                                                                            \
-  [[gnu::always_inline]] inline TwoMasks operator op(const TwoGroups& x, double y) {           \
-    return {x.a op y, x.b op y};                                                               \
-  }
-CONTACTLAB_TWO_GROUPS_COMPARISON(<)
-CONTACTLAB_TWO_GROUPS_COMPARISON(>)
-CONTACTLAB_TWO_GROUPS_COMPARISON(!=)
-#undef CONTACTLAB_TWO_GROUPS_COMPARISON
 
 [[gnu::always_inline]] inline TwoMasks operator&(const TwoMasks& x, const TwoMasks& y) {
   return {x.a & y.a, x.b & y.b};
