@@ -41,7 +41,8 @@ std::span<const std::size_t> RowRanges::plan(std::span<const std::uint32_t> rows
   }
   // Each thread's share of the work: in proportion to its speed (1 / seconds per unit), the
   // threads not yet measured at the mean speed of those that were.
-  std::vector<double> speed(threads, 0.0);
+  std::vector<double>& speed = speed_;  // kept: no allocation per step
+  speed.assign(threads, 0.0);
   double known = 0.0;
   std::size_t measured = 0;
   for (std::size_t t = 0; t < threads; ++t) {

@@ -41,7 +41,7 @@ class RowRanges {
 
  private:
   std::vector<std::size_t> bounds_;
-  std::vector<double> rate_, busy_;
+  std::vector<double> rate_, busy_, speed_;
 };
 
 // The work of particles [0, a): their pairs (none without rows) plus one per particle (on the
