@@ -51,6 +51,22 @@ namespace {
       EXPECT_EQ(c3[l], values[l][7]);                                                       \
     }                                                                                       \
   }                                                                                         \
+  TEST(DemLanes, StoredTransposeWritesEachColumnAtItsStride_##ns) {                         \
+    ns::Lanes rows[8];                                                                      \
+    double values[8][8];                                                                    \
+    for (int r = 0; r < 8; ++r)                                                             \
+      for (int c = 0; c < 8; ++c) values[r][c] = 10.0 * r + c;                              \
+    for (int r = 0; r < 8; ++r) rows[r] = ns::load_lanes(values[r]);                        \
+    constexpr int kStride = 12; /* a kin block: 8 + 4 doubles, the 4 from the half width */ \
+    double out[8 * kStride];                                                                \
+    for (double& x : out) x = -1.0;                                                         \
+    ns::store_transposed(rows, out, kStride);                                               \
+    ns::store_transposed<4>(rows, out + 8, kStride);                                        \
+    for (int k = 0; k < 8; ++k) {                                                           \
+      for (int l = 0; l < 8; ++l) EXPECT_EQ(out[k * kStride + l], values[l][k]) << k << l;  \
+      for (int l = 0; l < 4; ++l) EXPECT_EQ(out[k * kStride + 8 + l], values[l][k]) << k;   \
+    }                                                                                       \
+  }                                                                                         \
   TEST(DemLanes, OperationsAreTheScalarOnesLaneByLane_##ns) {                               \
     const double a_in[8] = {1.5, -2.0, 0.0, -0.0, 1e300, 3.0, 7.25, -1e-300};               \
     const double b_in[8] = {0.5, 4.0, -1.0, 2.0, 1e300, 3.0, -7.25, 2.0};                   \

@@ -292,6 +292,39 @@ template <class P, class M>
   }
 }
 
+// transpose8's columns stored as they form: column k's first kWidth doubles at to + k stride.
+// (transpose8 into an array and then stores went through the stack under AVX2: the array
+// spilled and was copied out in 16-byte moves, 6 % of the pair kernel's samples.)
+template <std::size_t kWidth = kLanes>
+[[gnu::always_inline]] inline void store_transposed(const Lanes (&r)[8], double* to,
+                                                    std::size_t stride) {
+  constexpr std::size_t kW = kPartLanes;
+  static_assert(kWidth == kLanes || kWidth == kLanes / 2);
+  if constexpr (kLaneParts == 1) {
+    LanePart in[kLanes], c[kLanes];
+#pragma GCC unroll 8
+    for (std::size_t k = 0; k < kLanes; ++k) in[k] = part_of(r[k], 0);
+    transpose_part<LanePart, MaskPart>(in, c);
+#pragma GCC unroll 8
+    for (std::size_t k = 0; k < kLanes; ++k) std::memcpy(to + k * stride, &c[k], kWidth * 8);
+  } else {
+#pragma GCC unroll 4
+    for (std::size_t q = 0; q < kLaneParts; ++q) {  // the rows' part: columns q W ..
+#pragma GCC unroll 4
+      for (std::size_t p = 0; p * kW < kWidth; ++p) {  // rows p W ..: the columns' part
+        LanePart in[kW], out[kW];
+#pragma GCC unroll 4
+        for (std::size_t i = 0; i < kW; ++i) in[i] = part_of(r[p * kW + i], q);
+        transpose_part<LanePart, MaskPart>(in, out);
+#pragma GCC unroll 4
+        for (std::size_t j = 0; j < kW; ++j) {
+          std::memcpy(to + (q * kW + j) * stride + p * kW, &out[j], sizeof(LanePart));
+        }
+      }
+    }
+  }
+}
+
 // With one register a row: the columns of four quarter-rows laid side by side, q[p] holding
 // row p's four values, then row p + 4's (the tops of a transpose's two halves).
 template <class P = LanePart, class M = MaskPart>

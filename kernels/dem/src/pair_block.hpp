@@ -321,10 +321,7 @@ inline void store_outputs(PairBlock& blk, std::size_t b, const PairOutputs<Lanes
                           bool count_overlaps, std::size_t k0, std::uint64_t& large,
                           std::uint32_t& bad) {
   const Lanes fields[kLanes] = {o.fx, o.fy, o.fz, o.cx, o.cy, o.cz, o.touch, o.flag};
-  Lanes pairs[kLanes];
-  transpose8(fields, pairs);
-  double* rec = blk.records() + PairBlock::kRecordFields * b;
-  for (std::size_t l = 0; l < kLanes; ++l) store_lanes(rec + kLanes * l, pairs[l]);
+  store_transposed(fields, blk.records() + PairBlock::kRecordFields * b, PairBlock::kRecordFields);
   if constexpr (kRolling) {
     store_lanes(blk.roll(0) + b, o.roll_x);
     store_lanes(blk.roll(1) + b, o.roll_y);

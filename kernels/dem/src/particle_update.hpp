@@ -192,14 +192,8 @@ inline void drift_particles(Particles& p, double* kin, const DriftTerms& t, std:
                                 load_lanes(arrays.mass + a)};
     const Lanes spin[kLanes] = {wxa + bx * kick, wya + by * kick, wza + bz * kick, Lanes{},
                                 Lanes{},         Lanes{},         Lanes{},         Lanes{}};
-    Lanes head_rows[kLanes], spin_rows[kLanes];
-    transpose8(head, head_rows);
-    transpose8(spin, spin_rows);
-    for (std::size_t l = 0; l < kLanes; ++l) {
-      double* block = kin + kKinStride * (a + l);
-      store_lanes(block, head_rows[l]);
-      std::memcpy(block + 8, &spin_rows[l], 4 * sizeof(double));
-    }
+    store_transposed(head, kin + kKinStride * a, kKinStride);
+    store_transposed<kLanes / 2>(spin, kin + kKinStride * a + 8, kKinStride);
     const Lanes ddx = xa - load_lanes(arrays.x0 + a), ddy = ya - load_lanes(arrays.y0 + a),
                 ddz = za - load_lanes(arrays.z0 + a);
     const Lanes disp = ddx * ddx + ddy * ddy + ddz * ddz;
