@@ -72,6 +72,25 @@ $py scripts/dem-isa-compare --run best="$B" --run baseline="$B:SSE4" \
   { echo "dem-isa-compare failed:"; cat "$dir/dem-isa-compare-made.out"; status=1; }
 grep -q '"step_isa": "baseline"' "$dir/isa/a/b/c.json" 2>/dev/null ||
   { echo "dem-isa-compare wrote no record of the baseline run in $dir/isa/a/b/c.json"; status=1; }
+# Side by side (two CPUs: every machine here has them; a one-CPU one is refused by name).
+if [ "$(nproc)" -ge 2 ]; then
+  $py scripts/dem-isa-compare --run best="$B" --run baseline="$B:SSE4" --side-by-side \
+    --config experiments/dem/drop-box.json --restart "$dir/drop.chk" --steps 5 --rounds 2 \
+    --json "$dir/isa/side.json" >"$dir/dem-isa-side.out" 2>&1 ||
+    { echo "dem-isa-compare --side-by-side failed:"; cat "$dir/dem-isa-side.out"; status=1; }
+  grep -q '"method": "both runs at once' "$dir/isa/side.json" 2>/dev/null ||
+    { echo "dem-isa-compare --side-by-side recorded no side-by-side method"; status=1; }
+fi
+# One run side by side with nothing: refused in one line that says what it needs.
+$py scripts/dem-isa-compare --run a="$B" --side-by-side --config experiments/dem/drop-box.json \
+  --restart "$dir/drop.chk" >"$dir/side-one.out" 2>"$dir/side-one.err"
+rc=$?
+if [ $rc = 0 ] || [ "$(wc -l <"$dir/side-one.err")" != 1 ] ||
+  ! grep -q "side-by-side needs two runs" "$dir/side-one.err"; then
+  echo "dem-isa-compare --side-by-side with one run: expected a one-line refusal; got exit $rc:"
+  cat "$dir/side-one.err"
+  status=1
+fi
 
 [ $status = 0 ] && echo ok
 exit $status
