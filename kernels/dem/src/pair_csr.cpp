@@ -120,7 +120,10 @@ void PairList::build_csr(std::size_t particles, int threads, RadixBuffers& buffe
 void radix_sort(std::vector<std::uint64_t>& keys, std::vector<std::uint32_t>& payload, int bits,
                 std::vector<std::uint64_t>& key_scratch,
                 std::vector<std::uint32_t>& payload_scratch, int threads) {
-  constexpr int kDigit = 11;
+  // Eight bits a pass: with eleven (one pass fewer on the bed's 34-bit spring keys) the
+  // scatter wrote to 2,048 buckets of keys and 2,048 of payloads at once, more lines than L1
+  // holds, and sorting the bed's 245,760 new keys took 8.3 ms at one thread, 1.8 ms with 256.
+  constexpr int kDigit = 8;
   constexpr std::size_t kBuckets = std::size_t{1} << kDigit;
   const std::size_t n = keys.size();
   resize_to_overwrite(key_scratch, n);
