@@ -326,7 +326,7 @@ ContactList ContactDetector::neighbor_list(const Scene& scene, const DetectOptio
              run);
     }
   });
-  return canonicalize(contacts_, working_to_input());
+  return canonicalize(contacts_, working_to_input(), options.threads);
 }
 
 void ContactDetector::release_buffers() {

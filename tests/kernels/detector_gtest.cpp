@@ -115,6 +115,9 @@ TEST(Detector, WorkingIdsMapBackToInputRows) {
     EXPECT_EQ(detector.contacts().particle_count(), scene.size());
     EXPECT_EQ(detector.contacts().pair_count(), expected.pair_count());
     EXPECT_TRUE(same_contacts(canonicalize(detector.contacts(), map), expected));
+    // On a given team (the DEM rebuild's own thread count), the same list.
+    EXPECT_EQ(canonicalize(detector.contacts(), map, 1), canonicalize(detector.contacts(), map));
+    EXPECT_EQ(canonicalize(detector.contacts(), map, 3), canonicalize(detector.contacts(), map));
     EXPECT_TRUE(same_contacts(detector.canonical_contacts(), expected));
   }
 }

@@ -31,9 +31,12 @@ struct ContactList {
 };
 
 // Renames working ids to input ids (working_to_input empty = identity), moves every row to
-// its input particle and sorts each row ascending: the form compared between variants.
+// its input particle and sorts each row ascending: the form compared between variants. On
+// `threads` threads (0: OpenMP's default team), so that a run told to use one thread uses one:
+// a team of the default size left its idle worker spinning on the other core after every
+// one-thread DEM rebuild.
 ContactList canonicalize(const ContactList& working,
-                         std::span<const std::uint32_t> working_to_input);
+                         std::span<const std::uint32_t> working_to_input, int threads = 0);
 
 // CSV `i,j` per contact with i < j, 0-based input rows, ascending; `canonical` must come from
 // canonicalize(). Written atomically.
