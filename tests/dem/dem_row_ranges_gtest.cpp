@@ -1,9 +1,12 @@
 // The ordered pass's row ranges (RowRanges): split by work (pairs plus particles) before any
 // thread was timed, moved towards the faster threads by their measured seconds per unit of
-// work, every start a multiple of eight in [0, n], in order; a new thread count starts over.
+// work, every start a multiple of eight in [0, n], in order; a new thread count starts over. And
+// the pass's signals between threads (RowsDone).
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <cstdint>
+#include <thread>
 #include <vector>
 
 #include "contactlab/dem/row_ranges.hpp"
@@ -97,6 +100,36 @@ TEST(DemRowRanges, ANewThreadCountStartsOver) {
   const auto three = ranges.plan(rows, rows.size() - 1, 3);  // nothing known of a team of three
   EXPECT_EQ(ranges.seconds_per_unit()[0], 0.0);
   EXPECT_EQ(three[1], 264u);  // 1600 / 3 units: 266.7 particles
+}
+
+// RowsDone: a wait returns only once the thread awaited announced that pass or a later one (and
+// what it wrote before is seen), an earlier pass's signal does not count, and more threads than
+// cores (each waiting on the next, as the ordered pass's ranges do) all get through.
+TEST(DemRowsDone, AWaitSeesTheAnnouncedPassAndWhatCameBefore) {
+  constexpr std::size_t kThreads = 8;  // on the 2-core machines: oversubscribed
+  constexpr std::uint64_t kPasses = 200;
+  RowsDone done;
+  done.resize(kThreads);
+  std::vector<std::atomic<std::uint64_t>> written(kThreads);  // relaxed: the signals order them
+  std::atomic<int> wrong{0};
+  std::vector<std::thread> team;
+  for (std::size_t t = 0; t < kThreads; ++t) {
+    team.emplace_back([&, t] {
+      for (std::uint64_t pass = 1; pass <= kPasses; ++pass) {
+        written[t].store(pass, std::memory_order_relaxed);  // published by the announce
+        done.announce(t, pass);
+        if (t + 1 < kThreads) {
+          done.wait_for(t + 1, pass);
+          // The next one's write of this pass (or of a later one, had it gone on).
+          if (written[t + 1].load(std::memory_order_relaxed) < pass) ++wrong;
+        }
+        // The next pass may not start before the one after has read this one's write.
+        if (t > 0) done.wait_for(t - 1, pass);
+      }
+    });
+  }
+  for (std::thread& thread : team) thread.join();
+  EXPECT_EQ(wrong.load(), 0);
 }
 
 }  // namespace

@@ -6,11 +6,13 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cstdint>
 #include <span>
 #include <vector>
 
 #include "contactlab/dem/force_variant.hpp"  // kRowsPerBlock
+#include "contactlab/dem/row_ranges.hpp"     // RowsDone
 #include "dem_isa.hpp"
 #include "lanes.hpp"
 #include "pair_block.hpp"
@@ -36,9 +38,13 @@ inline void combine_counts(std::uint64_t here, std::uint32_t bad_here, std::uint
 #pragma omp atomic
     total += here;
   }
-  if (bad_here != UINT32_MAX) {
+  if (bad_here != UINT32_MAX) {  // atomic: a finish on another thread may be reading it
 #pragma omp critical(dem_bad_index)
-    bad = std::min(bad, bad_here);
+    {
+      const std::atomic_ref<std::uint32_t> first(bad);
+      first.store(std::min(first.load(std::memory_order_relaxed), bad_here),
+                  std::memory_order_relaxed);
+    }
   }
 }
 
@@ -191,17 +197,19 @@ constexpr std::size_t kOrderedBlockRows = 512;
 // + lag], are done; lag = max_span finishes particles while their sums are still in cache (fused),
 // lag = n finishes every particle after the barrier (split: the pair phase timed alone).
 // mark(phase) is called by every thread where a phase ends (after the pairs, the j sides from other
-// threads, the serial walls). The last max_span particles of a range wait for the next range's
-// rows, after a barrier. A particle's sums do not depend on when it is finished, so the result is
-// the same for any thread count and any ranges. With more than one thread each reports busy(t,
-// seconds) on its own range (its pairs, the j sides left to it and its finish; not the barriers'
-// waits nor the serial walls), for RowRanges to even out.
+// threads, the serial walls). The last max_span particles of a range wait for the rows that
+// reach them: those of the later threads whose ranges start within max_span of its end (done:
+// their signals of pass `pass`; with serial walls, a barrier of the team). A particle's sums do
+// not depend on when it is finished, so the result is the same for any thread count and any
+// ranges. With more than one thread each reports busy(t, seconds) on its own range (its pairs,
+// the j sides left to it and its finish; not the waits nor the serial walls), for RowRanges to
+// even out.
 template <bool kRolling, bool kClamp, class Finish, class Walls, class Mark, class Busy>
 void force_pass(const double* kin, std::size_t n, PairList& q, const PairCoefficients& c, double dt,
                 bool fused, bool serial_walls, std::span<const std::size_t> bounds, double* acc,
-                std::vector<double>& scratch, std::span<LeftJSides> left, Finish& finish,
-                Walls& walls, Mark& mark, Busy& busy, std::uint64_t& large, std::uint32_t& bad_pair,
-                std::uint32_t& bad_wall) {
+                std::vector<double>& scratch, std::span<LeftJSides> left, RowsDone& done,
+                std::uint64_t pass, Finish& finish, Walls& walls, Mark& mark, Busy& busy,
+                std::uint64_t& large, std::uint32_t& bad_pair, std::uint32_t& bad_wall) {
   const auto t = static_cast<std::size_t>(omp_get_thread_num());
   const auto threads = static_cast<std::size_t>(omp_get_num_threads());
   const std::size_t b = range_begin(bounds, n, t, threads);
@@ -235,12 +243,24 @@ void force_pass(const double* kin, std::size_t n, PairList& q, const PairCoeffic
   combine_counts(large_here, bad_here, large, bad_pair);
   large_here = 0;
   double busy_s = timed ? omp_get_wtime() - start_s : 0.0;
+  // The later threads whose rows reach this range: [t + 1, reaching). A later one's pair (i, j)
+  // has j >= i - max_span, so one starting at or past e + max_span leaves nothing here and
+  // reads no block here (and is not waited for: it may still be starting, resetting its lists).
+  std::size_t reaching = t + 1;
+  while (reaching < threads && range_begin(bounds, n, reaching, threads) < e + q.max_span) {
+    ++reaching;
+  }
+  if (serial_walls) {
 #pragma omp barrier
+  } else {
+    done.announce(t, pass);
+    for (std::size_t u = t + 1; u < reaching; ++u) done.wait_for(u, pass);
+  }
   mark(Phase::kPairs);
   const double resume_s = timed ? omp_get_wtime() : 0.0;
   // The j sides later threads left, in their order (their rows' order): none from a particle
   // finished above, whose j sides all came from this thread's rows.
-  for (std::size_t from = t + 1; from < threads; ++from) {
+  for (std::size_t from = t + 1; from < reaching; ++from) {
     add_left_sides<kRolling>(kin, left[from * threads + t], acc);
   }
   busy_s += timed ? omp_get_wtime() - resume_s : 0.0;

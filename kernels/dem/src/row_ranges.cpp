@@ -1,7 +1,9 @@
 #include "contactlab/dem/row_ranges.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <numeric>
+#include <thread>
 
 namespace contactlab::dem {
 
@@ -82,6 +84,27 @@ void RowRanges::learn(std::span<const std::uint32_t> rows) {
     rate = rate > 0.0
                ? (1.0 - kSmoothing) * rate + kSmoothing * std::clamp(seen, 0.5 * rate, 2.0 * rate)
                : seen;
+  }
+}
+
+void RowsDone::resize(std::size_t threads) {
+  if (signals_.size() < kStride * threads) signals_.resize(kStride * threads, 0);
+}
+
+void RowsDone::announce(std::size_t t, std::uint64_t pass) {
+  std::atomic_ref<std::uint64_t>(signals_[kStride * t]).store(pass, std::memory_order_release);
+}
+
+void RowsDone::wait_for(std::size_t u, std::uint64_t pass) {
+  const std::atomic_ref<std::uint64_t> signal(signals_[kStride * u]);
+  for (unsigned spins = 0; signal.load(std::memory_order_acquire) < pass; ++spins) {
+    if (spins < 4096) {
+#if defined(__x86_64__) || defined(__i386__)
+      __builtin_ia32_pause();
+#endif
+    } else {
+      std::this_thread::yield();
+    }
   }
 }
 

@@ -276,6 +276,8 @@ class Engine {
   RowRanges row_ranges_;  // the ordered pass's range per thread, by the threads' speeds
   // The ordered pass's j sides for other threads' particles: threads x threads lists.
   std::vector<LeftJSides> left_j_sides_;
+  RowsDone rows_done_;                // the ordered pass's signals: each thread's rows done
+  std::uint64_t ordered_passes_ = 0;  // the ordered passes so far: the signals' pass numbers
 };
 
 }  // namespace contactlab::dem

@@ -44,6 +44,28 @@ class RowRanges {
   std::vector<double> rate_, busy_, speed_;
 };
 
+// The ordered pass's signals between threads, instead of a barrier of the whole team after the
+// pairs: thread t announces that its rows of pass `pass` are done, and waits only for the later
+// threads whose rows reach its particles (their j sides for it are complete, and they have read
+// its kinematics blocks, which its drift rewrites). At two threads the last thread no longer
+// waits for the first before finishing its own particles; at P threads a thread waits for its
+// neighbours, not for the slowest of all.
+class RowsDone {
+ public:
+  // One signal per thread (kept from step to step: a pass's number tells old from new).
+  void resize(std::size_t threads);
+  // Thread t's rows of pass `pass` are done (a release: its j sides and reads come before).
+  void announce(std::size_t t, std::uint64_t pass);
+  // Until thread u has announced pass `pass` or a later one (an acquire; pass numbers rise),
+  // pausing, then yielding the core (an oversubscribed team: the thread awaited may need this
+  // one's core to run).
+  void wait_for(std::size_t u, std::uint64_t pass);
+
+ private:
+  static constexpr std::size_t kStride = 8;  // 64 bytes apart: a cache line each
+  std::vector<std::uint64_t> signals_;
+};
+
 // The work of particles [0, a): their pairs (none without rows) plus one per particle (on the
 // settled bed a pair through the pass and a particle through the finish and drift cost about
 // the same, 10 ns).
