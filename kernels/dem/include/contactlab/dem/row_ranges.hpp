@@ -3,13 +3,13 @@
 // that the threads finish together: split by work (a row's pairs and its particle), then moved
 // step by step by each thread's measured speed.
 //
-// Why: the pass has a barrier after the pairs and one at its end, so the slowest thread sets
-// the step. On the 2-core VM one thread's busy time per step ran 10 - 15 % above the other's
-// for seconds at a time, in either thread, on the same rows (the host's load, not the work),
-// and the other waited: a static split cannot follow that, and on a scene whose particles do
-// not all have the same pairs (a hopper's packed fill above its falling stream) a split by
-// particle count is uneven at any thread count. Where a range starts changes no bit of the
-// result (force_pass.hpp), so the ranges may follow the clock.
+// Why: after its pairs a thread waits for the next threads' rows (RowsDone, below), and the
+// pass ends with a barrier, so the slowest thread sets the step. On the 2-core VM one thread's busy
+// time per step ran 10 - 15 % above the other's for seconds at a time, in either thread, on the
+// same rows (the host's load, not the work), and the other waited: a static split cannot follow
+// that, and on a scene whose particles do not all have the same pairs (a hopper's packed fill above
+// its falling stream) a split by particle count is uneven at any thread count. Where a range starts
+// changes no bit of the result (force_pass.hpp), so the ranges may follow the clock.
 #include <cstddef>
 #include <cstdint>
 #include <span>
