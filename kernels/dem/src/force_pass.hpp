@@ -195,7 +195,7 @@ constexpr std::size_t kOrderedBlockRows = 512;
 // with_walls, large, bad_wall): walls unless serial_walls, when walls(0, n, ...) adds them for
 // every particle in one thread first; gravity, kick) as soon as the rows holding its j sides, (a, a
 // + lag], are done; lag = max_span finishes particles while their sums are still in cache (fused),
-// lag = n finishes every particle after the barrier (split: the pair phase timed alone).
+// lag = n finishes every particle after the waits (split: the pair phase timed alone).
 // mark(phase) is called by every thread where a phase ends (after the pairs, the j sides from other
 // threads, the serial walls). The last max_span particles of a range wait for the rows that
 // reach them: those of the later threads whose ranges start within max_span of its end (done:
