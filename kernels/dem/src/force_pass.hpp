@@ -126,9 +126,9 @@ inline void assign_rows(const PairList& q, std::size_t first, std::size_t last, 
 // The ordered pass's sums: each row summed in registers and stored to its particle (nothing
 // reached it before: its j sides come from later rows), then each j side subtracted from j's
 // sum when this thread owns j (j >= own_begin); otherwise it is appended, in pair order, to
-// left_for(j): the sides for j's owner, which adds them after the barrier (they come from later
-// rows, so pair order still holds). Particle a's sum is therefore its own row, then its j sides
-// in pair order, whatever the thread count and ranges.
+// left_for(j): the sides for j's owner, which adds them once this thread's rows are done (they come
+// from later rows, so pair order still holds). Particle a's sum is therefore its own row, then its
+// j sides in pair order, whatever the thread count and ranges.
 template <bool kRolling, class LeftFor>
 inline void accumulate_ordered(const double* kin, PairList& q, std::size_t first, std::size_t last,
                                PairBlock& blk, std::size_t own_begin, double* acc,
@@ -239,7 +239,8 @@ void force_pass(const double* kin, std::size_t n, PairList& q, const PairCoeffic
       next = last - lag;
     }
   }
-  // The pairs' failures before the barrier: a finish after it knows whether any pair failed.
+  // The pairs' failures before the signal: a finish after the wait knows those of the rows that
+  // reach its particles.
   combine_counts(large_here, bad_here, large, bad_pair);
   large_here = 0;
   double busy_s = timed ? omp_get_wtime() - start_s : 0.0;

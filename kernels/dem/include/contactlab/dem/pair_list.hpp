@@ -76,7 +76,7 @@ struct PairList {
 
   std::size_t size() const { return i.size(); }
   void resize(std::size_t n);
-  // As resize, for a list the caller fills anew (i, j, image, springs; out: the force pass's).
+  // As resize, for a list the caller fills anew (i, j, image, springs).
   void resize_to_overwrite(std::size_t n);
   // Orients (j < i, springs and images follow), groups by i, and indexes rows and j sides, on
   // `threads` threads (the same lists for any count).
@@ -85,11 +85,12 @@ struct PairList {
 };
 
 // The j sides that one thread's rows of the ordered force pass give particles another thread
-// owns (force_pass.hpp), appended in pair order and added by the owner after the barrier: per
-// pair its record (kRecordDoubles: the force on i [N], j gets minus it; n x F_t [N], j's
-// torque is -r_j times it; 1 if touching; the overlap flag), its j and, with rolling
-// resistance, the rolling torque on i [N m] (j gets minus it). Only these pairs are kept: a
-// thread's range meets the next ones' in about max_span particles, whatever the list's size.
+// owns (force_pass.hpp), appended in pair order and added by the owner once it has waited for
+// this thread's rows (RowsDone): per pair its record (kRecordDoubles: the force on i [N], j gets
+// minus it; n x F_t [N], j's torque is -r_j times it; 1 if touching; the overlap flag), its j
+// and, with rolling resistance, the rolling torque on i [N m] (j gets minus it). Only these
+// pairs are kept: a thread's range meets the next ones' in about max_span particles, whatever
+// the list's size.
 struct LeftJSides {
   static constexpr std::size_t kRecordDoubles = 8;
   AlignedVector<double> records;
