@@ -56,8 +56,13 @@ RebuildStats NeighborBuilder::rebuild(Particles& p, PairList& pairs, const Domai
                                       CarriedSprings* carried) {
   const std::size_t n = p.size();
   RebuildStats stats;
-  // 1. The touching pairs' springs, keyed by stable ids (oriented from the lower id).
-  if (carried == nullptr) {
+  // 1. The springs to carry. Where the old list indexes these particles, with its rows (the
+  //    engine's own rebuilds), each new pair looks its spring up in its later particle's old row
+  //    (4.): a few pairs each, in nearly the order of the new list, and no sort. Otherwise (a
+  //    halo's migrants, a list the sink renumbered) the touching pairs' springs, keyed by stable
+  //    ids (oriented from the lower id), are merged by sorted keys (5.).
+  const bool from_old_rows = carried == nullptr && n > 0 && pairs.rows.size() == n + 1;
+  if (carried == nullptr && !from_old_rows) {
     collect_springs(p, pairs, old_springs_, threads);
     carried = &old_springs_;
   }
@@ -250,24 +255,57 @@ RebuildStats NeighborBuilder::rebuild(Particles& p, PairList& pairs, const Domai
   pair_start_[0] = 0;
   parallel_inclusive_scan(pair_start_.data() + 1, n, threads, range_sums_);
   const std::size_t count = pair_start_[n];
+  if (from_old_rows) {  // the old list's rows, partners and springs, kept apart while it is read
+    old_rows_.swap(pairs.rows);
+    old_j_.swap(pairs.j);
+    old_hx_.swap(pairs.hx);
+    old_hy_.swap(pairs.hy);
+    old_hz_.swap(pairs.hz);
+  }
+  // The old pair of the particles at old indices a (the new pair's i) and b, if it touched: its
+  // spring seen from a into h (negated where the old pair ran from b: it was seen from its i,
+  // the later of the two), as the keyed merge gives it.
+  const std::uint32_t *const old_rows = old_rows_.data(), *const old_j = old_j_.data();
+  const double *const old_hx = old_hx_.data(), *const old_hy = old_hy_.data(),
+                      *const old_hz = old_hz_.data();
+  auto old_spring = [=](std::uint32_t a, std::uint32_t b, double* h) {
+    const std::uint32_t later = std::max(a, b), earlier = std::min(a, b);
+    for (std::uint32_t m = old_rows[later]; m < old_rows[later + 1]; ++m) {
+      if (old_j[m] != earlier) continue;
+      if (old_hx[m] == 0.0 && old_hy[m] == 0.0 && old_hz[m] == 0.0) return false;
+      const double sign = a == later ? 1.0 : -1.0;
+      h[0] = sign * old_hx[m];
+      h[1] = sign * old_hy[m];
+      h[2] = sign * old_hz[m];
+      return true;
+    }
+    return false;
+  };
   pairs.resize_to_overwrite(count);
-#pragma omp parallel for schedule(static) num_threads(threads)
+  std::size_t looked_up = 0;
+#pragma omp parallel for schedule(static) num_threads(threads) reduction(+ : looked_up)
   for (std::size_t a = 0; a < n; ++a) {
     const std::uint32_t row = row_order_[a];
     std::uint64_t k = pair_start_[a];
     for (std::uint32_t q : list.partners_of(row)) {
       if (!kept(row, q)) continue;
+      const std::uint32_t partner = q < n ? q : ghost_owner_[q - n];
       pairs.i[k] = static_cast<std::uint32_t>(a);
-      pairs.j[k] = new_index_[q < n ? q : ghost_owner_[q - n]];
+      pairs.j[k] = new_index_[partner];
       pairs.image[k] = q < n ? kNoImage : ghost_image_[q - n];
-      pairs.hx[k] = pairs.hy[k] = pairs.hz[k] = 0.0;
+      double h[3] = {0.0, 0.0, 0.0};
+      if (from_old_rows) looked_up += old_spring(by_id_[row], by_id_[partner], h);
+      pairs.hx[k] = h[0];
+      pairs.hy[k] = h[1];
+      pairs.hz[k] = h[2];
       ++k;
     }
   }
   stats.pairs = count;
+  stats.carried_contacts += looked_up;
 
   // 5. Merge the carried springs into the new list by sorted keys: O(pairs) radix sorts.
-  if (carried->size() > 0) {
+  if (!from_old_rows && carried->size() > 0) {
     std::vector<std::uint64_t>& old_keys = carried->keys;
     const std::size_t old_count = old_keys.size();
     resize_to_overwrite(old_payload_, old_count);

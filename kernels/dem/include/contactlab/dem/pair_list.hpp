@@ -152,9 +152,11 @@ class NeighborBuilder {
   // positions are wrapped into the domain first. The candidate search runs on `threads`
   // threads; the result is the same for any count. The order and every row depend only on the
   // particles' ids, positions and the grid: a process holding a subset of them (and the same
-  // grid, through `ranks`) gets the one-process order restricted to its particles. With
-  // `carried`, its springs are carried instead of the old list's (whose indices may no longer
-  // match the particles). Throws InputError if a periodic length is under 3 pair reaches.
+  // grid, through `ranks`) gets the one-process order restricted to its particles. The old
+  // list's springs are looked up in its rows where it has rows for these particles (its last
+  // build_csr), else merged by stable-id keys; with `carried`, its springs are carried instead
+  // (the old list's indices may no longer match the particles). Throws InputError if a periodic
+  // length is under 3 pair reaches.
   RebuildStats rebuild(Particles& particles, PairList& pairs, const Domain& domain, double skin,
                        int threads = 1, RankAgreement* ranks = nullptr,
                        CarriedSprings* carried = nullptr);
@@ -169,6 +171,10 @@ class NeighborBuilder {
   RadixBuffers sort_;  // the new list's keys and payloads, and every sort's scratch
   std::vector<std::uint32_t> old_payload_;
   CarriedSprings old_springs_;
+  // The old list's rows, partners and springs while the new list is written (its arrays'
+  // storage, swapped back and forth from rebuild to rebuild).
+  std::vector<std::uint32_t> old_rows_, old_j_;
+  AlignedVector<double> old_hx_, old_hy_, old_hz_;
 };
 
 // LSD radix sort of keys < 2^bits with their payloads (stable): O(n / P + 2048 P) per 11-bit
