@@ -150,7 +150,7 @@ TEST(DemNeighborList, HistoryFollowsItsPairThroughAReorder) {
 }
 
 // The engine's rebuilds look each new pair's spring up in the old list's rows; a list without
-// rows for the particles (one the sink renumbered) goes through the merge by stable-id keys. Both
+// rows for the particles goes through the merge by stable-id keys (as the sink's springs do). Both
 // carry the same springs, bit for bit (signs where a pair turned round, a -0 component, pairs
 // that stopped touching), on a scene whose order changes and whose pairs cross periodic faces.
 TEST(DemNeighborList, OldRowsCarryWhatTheKeyedMergeCarries) {

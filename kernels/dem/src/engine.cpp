@@ -223,14 +223,17 @@ void Engine::rebuild() {
   // With a halo: the ghosts leave before the sink (it counts owned particles only), and the
   // migrants and new ghosts arrive after it, their springs carried along.
   if (halo_ != nullptr) halo_->drop_ghosts(particles_, pairs_, carried_);
-  remove_sunk_particles();  // sink.cpp: removals happen at rebuilds only
-  check_containment();      // this process's own particles, once the sink has taken its
+  // sink.cpp: removals happen at rebuilds only; they renumber the particles, so the springs
+  // then go by stable ids (carried_).
+  const bool removed = remove_sunk_particles();
+  check_containment();  // this process's own particles, once the sink has taken its
   if (halo_ != nullptr) {
     halo_->exchange_particles(particles_, carried_);
     builder_.rebuild(particles_, pairs_, settings_.domain, settings_.skin, settings_.threads, halo_,
                      &carried_);
   } else if (!particles_.id.empty()) {
-    builder_.rebuild(particles_, pairs_, settings_.domain, settings_.skin, settings_.threads);
+    builder_.rebuild(particles_, pairs_, settings_.domain, settings_.skin, settings_.threads,
+                     nullptr, removed ? &carried_ : nullptr);
   }
   ++rebuilds_;
   index_ids();

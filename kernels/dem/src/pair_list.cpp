@@ -59,8 +59,9 @@ RebuildStats NeighborBuilder::rebuild(Particles& p, PairList& pairs, const Domai
   // 1. The springs to carry. Where the old list indexes these particles, with its rows (the
   //    engine's own rebuilds), each new pair looks its spring up in its later particle's old row
   //    (4.): a few pairs each, in nearly the order of the new list, and no sort. Otherwise (a
-  //    halo's migrants, a list the sink renumbered) the touching pairs' springs, keyed by stable
-  //    ids (oriented from the lower id), are merged by sorted keys (5.).
+  //    halo's migrants, the springs the sink took before it removed particles, a caller's list
+  //    without rows) the touching pairs' springs, keyed by stable ids (oriented from the lower
+  //    id), are merged by sorted keys (5.).
   const bool from_old_rows = carried == nullptr && n > 0 && pairs.rows.size() == n + 1;
   if (carried == nullptr && !from_old_rows) {
     collect_springs(p, pairs, old_springs_, threads);

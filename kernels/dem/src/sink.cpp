@@ -7,24 +7,43 @@
 #include <vector>
 
 #include "contactlab/dem/engine.hpp"
+#include "contactlab/kernels/count_then_fill.hpp"
 
 namespace contactlab::dem {
 
-void Engine::remove_sunk_particles() {
+bool Engine::remove_sunk_particles() {
   // The constructor's build keeps every particle: its start checks index the initial arrays.
   if (rebuilds_ == 0 || !(settings_.sink_below_z > -std::numeric_limits<double>::infinity())) {
-    return;
+    return false;
   }
   Particles& p = particles_;
   const std::size_t n = p.size();
-  std::vector<std::uint32_t> new_index(n, kRemoved);
-  std::uint32_t kept = 0;
+  const int threads = settings_.threads;
+  const double level = settings_.sink_below_z;
+  const double* const z = p.z.data();
+  // The particles that stay and those that leave, each in order, listed range by range on the
+  // engine's threads (count_then_fill): no pass of length n on one thread (on a discharging
+  // hopper a rebuild that removes comes every 15 steps or so).
+  auto list = [&](std::vector<std::uint32_t>& out, bool stays) {
+    count_then_fill(
+        n, threads,
+        [&](std::size_t first, std::size_t last) {
+          std::size_t count = 0;
+          for (std::size_t a = first; a < last; ++a) count += (z[a] >= level) == stays;
+          return count;
+        },
+        [&](std::size_t total) { out.resize(total); },
+        [&](std::size_t first, std::size_t last, std::size_t at) {
+          for (std::size_t a = first; a < last; ++a) {
+            if ((z[a] >= level) == stays) out[at++] = static_cast<std::uint32_t>(a);
+          }
+        });
+  };
+  std::vector<std::uint32_t> removed;
+  list(removed, false);
+  if (removed.empty()) return false;
   double mass = 0.0, energy = 0.0;
-  for (std::size_t a = 0; a < n; ++a) {
-    if (p.z[a] >= settings_.sink_below_z) {
-      new_index[a] = kept++;
-      continue;
-    }
+  for (const std::uint32_t a : removed) {  // in index order, as one loop over all would add
     mass += p.mass[a];
     // The energy it takes away (kinetic + gravity), so `dissipated` stays what was dissipated.
     energy += 0.5 * p.mass[a] * (p.vx[a] * p.vx[a] + p.vy[a] * p.vy[a] + p.vz[a] * p.vz[a]) +
@@ -32,34 +51,19 @@ void Engine::remove_sunk_particles() {
               p.mass[a] * (settings_.gravity[0] * p.x[a] + settings_.gravity[1] * p.y[a] +
                            settings_.gravity[2] * p.z[a]);
   }
-  if (kept == n) return;
-  removed_count_ += n - kept;
+  removed_count_ += removed.size();
   removed_mass_ += mass;
   initial_energy_ -= energy;
-  // Every per-particle array compacted in place (order kept: the cell order stays good).
-  p.for_each_array([&](auto& v) {
-    for (std::size_t a = 0; a < n; ++a) {
-      if (new_index[a] != kRemoved) v[new_index[a]] = v[a];
-    }
-    v.resize(kept);
-  });
-  // The old pair list renumbered, pairs with a removed particle dropped: the rebuild carries
-  // the survivors' tangential springs from it by stable ids.
-  PairList& q = pairs_;
-  std::size_t m = 0;
-  for (std::size_t k = 0; k < q.size(); ++k) {
-    const std::uint32_t i = new_index[q.i[k]], j = new_index[q.j[k]];
-    if (i == kRemoved || j == kRemoved) continue;
-    q.i[m] = i;
-    q.j[m] = j;
-    q.image[m] = q.image[k];
-    q.hx[m] = q.hx[k];
-    q.hy[m] = q.hy[k];
-    q.hz[m] = q.hz[k];
-    ++m;
-  }
-  q.resize(m);
-  if (kept == 0) q.build_csr(0);  // no rebuild follows: the empty list must be consistent
+  // The touching pairs' springs by stable ids, while the list still indexes these particles
+  // (with a halo, drop_ghosts took them already): the rebuild carries them from there. Pairs of
+  // a removed particle find no partner in the new list.
+  if (halo_ == nullptr) collect_springs(p, pairs_, carried_, threads);
+  std::vector<std::uint32_t> kept;
+  list(kept, true);
+  p.gather(kept, threads);  // every per-particle array compacted, the order kept
+  pairs_.resize(0);
+  pairs_.build_csr(kept.size());  // consistent for a run left without particles (no rebuild)
+  return true;
 }
 
 void Engine::index_ids() {

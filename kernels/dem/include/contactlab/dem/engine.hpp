@@ -215,9 +215,10 @@ class Engine {
   void rebuild();
   void set_counters(const State& state);  // time, step and the counters (restore, resume)
   Energies local_energies() const;        // this process's particles (dissipated not set)
-  // sink.cpp: removes the particles below the sink level (particle arrays and the old pair
-  // list, renumbered), and indexes the stable ids of the particles left.
-  void remove_sunk_particles();
+  // sink.cpp: removes the particles below the sink level from the particle arrays. True if it
+  // removed any: the old list's touching springs are then in carried_ by stable ids (unless a
+  // halo put them there already) and the list is emptied.
+  bool remove_sunk_particles();
   // With domain_bounds_particles: the first particle (in order) flung more than a box length
   // outside the box named (InputError at the start, else UnstableRun).
   void check_containment() const;
@@ -244,7 +245,7 @@ class Engine {
 
   EngineSettings settings_;
   Halo* halo_ = nullptr;
-  CarriedSprings carried_;  // with a halo: the springs a rebuild carries
+  CarriedSprings carried_;  // with a halo or after the sink: the springs a rebuild carries
   std::uint64_t run_particles_ = 0;
   StepIsa step_isa_ = step_isa();
   PairCoefficients coefficients_;
