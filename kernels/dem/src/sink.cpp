@@ -61,8 +61,14 @@ bool Engine::remove_sunk_particles() {
   std::vector<std::uint32_t> kept;
   list(kept, true);
   p.gather(kept, threads);  // every per-particle array compacted, the order kept
-  pairs_.resize(0);
-  pairs_.build_csr(kept.size());  // consistent for a run left without particles (no rebuild)
+  if (kept.empty()) {       // no rebuild follows: the empty list must be consistent
+    pairs_.resize(0);
+    pairs_.build_csr(0);
+  } else {
+    // No longer this list's particles; the rebuild overwrites it, whose arrays keep their size
+    // (emptied, each would be zero-filled again on one thread).
+    pairs_.rows.clear();
+  }
   return true;
 }
 
