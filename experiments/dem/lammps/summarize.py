@@ -79,6 +79,17 @@ def summarize(runs, breakdown):
             "min": min(ratios),
             "max": max(ratios),
         }
+        fewest = min(t for (n, t) in runs if n == name)
+        if threads > fewest:
+            # The criterion is per round: this many threads over the fewest, in the
+            # same round (compare.sh runs the two next to each other).
+            base = runs[(name, fewest)]["rounds"]
+            scaling = [run["rounds"][r] / base[r] for r in sorted(run["rounds"]) if r in base]
+            if scaling:
+                entry["over_fewest_threads"] = {
+                    "threads": fewest, "rounds": scaling,
+                    "median": statistics.median(scaling), "min": min(scaling),
+                    "max": max(scaling)}
         if "shares" in run:
             entry["phase_shares_median"] = {
                 k: statistics.median(s[k] for s in run["shares"]) for k in run["shares"][0]}
@@ -116,6 +127,9 @@ def self_test():
         'round 2: contactlab best threads 1: "BM_DemStep/threads:1/real_time",2100,5.2,5.2,ms,,,'
         '"step on AVX-512",,,4.4,5122,3.75,1.5e+07,0.08,0.02,0.77,0.004,0.13',
         "round 2: lammps ranks 1: 5e+06 particle-steps/s",
+        'round 1: contactlab best threads 2: "BM_DemStep/threads:2/real_time",2100,5.2,5.2,ms,,,'
+        '"step on AVX-512",,,4.4,5122,3.75,2.4e+07,0.08,0.02,0.77,0.004,0.13',
+        "round 1: lammps ranks 2: 1e+07 particle-steps/s",
     ]
     result = summarize(*parse(sample))
     best = result["contactlab best 1"]
@@ -124,6 +138,9 @@ def self_test():
     assert (best["min"], best["max"]) == (2.0, 3.0), best
     assert abs(best["phase_shares_median"]["pair_forces"] - 0.77) < 1e-12, best
     assert result["LAMMPS 1"]["timing_breakdown_median"] == {"Pair": 0.8, "Modify": 0.15}
+    two = result["contactlab best 2"]
+    assert two["over_fewest_threads"]["rounds"] == [2.0], two  # round 1 only: 2.4e7 / 1.2e7
+    assert "over_fewest_threads" not in best, best
     try:
         summarize(*parse(sample[:1]))
     except SystemExit as e:
@@ -158,8 +175,10 @@ def main():
         "commit": args.commit,
         "build": args.build,
         "method": "experiments/dem/lammps/compare.sh (interleaved rounds: each round runs every "
-                  "set and LAMMPS once); ratio = median over rounds of the round's ratio to "
-                  "LAMMPS, with the smallest and largest; shares: contactlab_dem_benchmark's "
+                  "set and LAMMPS once, each ratio's two runs next to each other); ratio = median "
+                  "over rounds of the round's ratio to LAMMPS, with the smallest and largest; "
+                  "over_fewest_threads: the per-round ratio to the same set at the fewest "
+                  "threads; shares: contactlab_dem_benchmark's "
                   "phase shares, LAMMPS's MPI task timing breakdown (%total / 100)",
         "note": args.note,
         "runs": summarize(runs, breakdown),

@@ -7,6 +7,9 @@
 // the linker could keep that copy for the whole program.
 #include <fmt/core.h>
 #include <omp.h>
+#if defined(__x86_64__)
+#include <immintrin.h>  // lanes.hpp: the square roots
+#endif
 
 #include <algorithm>
 #include <array>

@@ -150,8 +150,10 @@ inline void accumulate_ordered(const double* kin, PairList& q, std::size_t first
       left.roll_z[at] = roll[2][b];
     }
   };
+  // In a local: the sums' stores may alias the list, whose array it would reload every pair.
+  const std::uint32_t* const pair_j = q.j.data();
   auto j_side = [&](const double* p, const double* const* roll, std::size_t k, std::size_t b) {
-    const std::uint32_t j = q.j[k];
+    const std::uint32_t j = pair_j[k];
     if (j < own_begin) [[unlikely]] {  // another thread's particle: left for its owner
       leave(j, p, roll, b);
       return;
