@@ -15,6 +15,7 @@
 #include "pair_block.hpp"
 
 namespace contactlab::dem {
+using detail::kAccStride;
 using detail::kKinStride;
 
 // engine_isa.cpp defines them, once per instruction set.
@@ -219,7 +220,28 @@ void Engine::index_wall_reach() {
       });
 }
 
+void Engine::store_forces() {
+  if (!forces_in_sums_) return;
+  forces_in_sums_ = false;
+  Particles& p = particles_;
+  const double* acc = acc_.data();
+  const std::size_t n = p.size();
+#pragma omp parallel for schedule(static) num_threads(settings_.threads)
+  for (std::size_t a = 0; a < n; ++a) {
+    const double* s = acc + kAccStride * a;
+    p.fx[a] = s[0];
+    p.fy[a] = s[1];
+    p.fz[a] = s[2];
+    p.tx[a] = s[3];
+    p.ty[a] = s[4];
+    p.tz[a] = s[5];
+    p.contacts[a] = static_cast<std::uint16_t>(s[6]);
+    p.force_magnitude[a] = s[7];
+  }
+}
+
 void Engine::rebuild() {
+  store_forces();  // the sink, the migrants, the reorder and the velocities below read them
   // With a halo: the ghosts leave before the sink (it counts owned particles only), and the
   // migrants and new ghosts arrive after it, their springs carried along.
   if (halo_ != nullptr) halo_->drop_ghosts(particles_, pairs_, carried_);
@@ -314,6 +336,7 @@ bool Engine::advance(bool drift_next, bool end_at_rebuild) {
     max_disp_sq = drifted_disp_sq_;
     bad = drifted_bad_;
   } else {
+    store_forces();
     static constexpr std::array kDrifts{&Engine::drift_on<StepIsa::kBaseline>,
                                         &Engine::drift_on<StepIsa::kAvx2>,
                                         &Engine::drift_on<StepIsa::kAvx512>};
@@ -325,6 +348,7 @@ bool Engine::advance(bool drift_next, bool end_at_rebuild) {
   double t1 = omp_get_wtime();
   phases_.integrate_s += t1 - t0;
   if (bad != UINT32_MAX) {
+    store_forces();  // the run ends here: what it leaves shows the last forces
     const double m = std::hypot(p.vx[bad], p.vy[bad], p.vz[bad]) * dt;
     fail(std::isfinite(m) ? fmt::format("moved {:.3g} m in one step, more than skin/2 = {:.3g} m",
                                         m, 0.5 * settings_.skin)

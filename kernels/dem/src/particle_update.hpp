@@ -31,7 +31,7 @@ CONTACTLAB_DEM_ISA_NAMESPACE(build) {
 // The particle arrays the passes read and write, as plain pointers held over a loop (a call
 // per particle reloaded each from its vector).
 struct ParticleArrays {
-  double *x, *y, *z, *vx, *vy, *vz, *wx, *wy, *wz, *fx, *fy, *fz, *tx, *ty, *tz;
+  double *x, *y, *z, *vx, *vy, *vz, *wx, *wy, *wz;  // force and torque: ForceColumns
   double* force_magnitude;
   std::uint16_t* contacts;
   const double *inv_mass, *inv_inertia, *radius, *mass, *x0, *y0, *z0;
@@ -45,12 +45,6 @@ struct ParticleArrays {
         wx(p.wx.data()),
         wy(p.wy.data()),
         wz(p.wz.data()),
-        fx(p.fx.data()),
-        fy(p.fy.data()),
-        fz(p.fz.data()),
-        tx(p.tx.data()),
-        ty(p.ty.data()),
-        tz(p.tz.data()),
         force_magnitude(p.force_magnitude.data()),
         contacts(p.contacts.data()),
         inv_mass(p.inv_mass.data()),
@@ -69,11 +63,44 @@ struct FinishTerms {
   bool kick;          // apply the final half kick
 };
 
+// Force and torque as columns, one double a particle: the particle arrays (first = 0), or a
+// piece's buffer whose element 0 is particle `first`.
+struct ForceColumns {
+  double *fx, *fy, *fz, *tx, *ty, *tz;
+  std::size_t first;
+  static ForceColumns of(Particles& p) {
+    return {p.fx.data(), p.fy.data(), p.fz.data(), p.tx.data(), p.ty.data(), p.tz.data(), 0};
+  }
+  // A buffer of 6 x count doubles for particles [first, first + count).
+  static ForceColumns in(double* buffer, std::size_t count, std::size_t first) {
+    return {buffer,
+            buffer + count,
+            buffer + 2 * count,
+            buffer + 3 * count,
+            buffer + 4 * count,
+            buffer + 5 * count,
+            first};
+  }
+};
+
+// Where a finish puts a particle's results. To the particle arrays: force and torque, |F| of
+// the contacts and their count. Or, in a step whose finish drifts the next one (run_steps),
+// back into the particle's sums, in place (force, torque, count, |F|: the sums' lines are
+// written this step anyway, where the arrays were 116 more bytes a particle to and from
+// memory: 4 - 7 % of the bed's step on a Xeon with AVX-512), with force and torque also to
+// `columns` (a piece's buffer in L1) for the drift; Engine::store_forces copies the sums to
+// the arrays where anything reads them (a rebuild, a failed step).
+struct FinishOut {
+  ForceColumns columns;
+  bool to_sums;
+};
+
 // Finishes particles [first, last), after their walls are in their sums (acc: kAccStride
-// doubles a particle: force, torque, touching contacts).
-inline void finish_particles(const double* kin, const double* acc, Particles& p,
-                             const FinishTerms& t, std::size_t first, std::size_t last) {
+// doubles a particle: force, torque, touching contacts), their results where `out` says.
+inline void finish_particles(const double* kin, double* acc, Particles& p, const FinishTerms& t,
+                             std::size_t first, std::size_t last, const FinishOut& out) {
   const ParticleArrays arrays(p);
+  const ForceColumns& f = out.columns;
   const double drag = t.drag, gx = t.gravity[0], gy = t.gravity[1], gz = t.gravity[2];
   const double half = t.half_dt;
   std::size_t a = first;
@@ -86,21 +113,29 @@ inline void finish_particles(const double* kin, const double* acc, Particles& p,
     Lanes pvx, pvy, pvz, mass;  // the synchronised velocity and the mass: lanes 4..7 of kin
     top_columns(kin_rows, pvx, pvy, pvz, mass);
     transpose8(sum_rows, s);
-    store_counts(arrays.contacts + a, s[6]);  // exact: sums of ones
     Lanes fx = s[0], fy = s[1], fz = s[2];
-    store_lanes(arrays.force_magnitude + a, sqrt_lanes(fx * fx + fy * fy + fz * fz));
+    const Lanes magnitude = sqrt_lanes(fx * fx + fy * fy + fz * fz);
+    if (!out.to_sums) {
+      store_counts(arrays.contacts + a, s[6]);  // exact: sums of ones
+      store_lanes(arrays.force_magnitude + a, magnitude);
+    }
     fx -= drag * pvx;
     fy -= drag * pvy;
     fz -= drag * pvz;
     fx += mass * gx;
     fy += mass * gy;
     fz += mass * gz;
-    store_lanes(arrays.fx + a, fx);
-    store_lanes(arrays.fy + a, fy);
-    store_lanes(arrays.fz + a, fz);
-    store_lanes(arrays.tx + a, s[3]);
-    store_lanes(arrays.ty + a, s[4]);
-    store_lanes(arrays.tz + a, s[5]);
+    const std::size_t c = a - f.first;
+    store_lanes(f.fx + c, fx);
+    store_lanes(f.fy + c, fy);
+    store_lanes(f.fz + c, fz);
+    store_lanes(f.tx + c, s[3]);
+    store_lanes(f.ty + c, s[4]);
+    store_lanes(f.tz + c, s[5]);
+    if (out.to_sums) {
+      const Lanes results[kLanes] = {fx, fy, fz, s[3], s[4], s[5], s[6], magnitude};
+      store_transposed(results, acc + kAccStride * a, kAccStride);
+    }
     if (t.kick) {
       const Lanes im = load_lanes(arrays.inv_mass + a), ii = load_lanes(arrays.inv_inertia + a);
       store_lanes(arrays.vx + a, load_lanes(arrays.vx + a) + fx * im * half);
@@ -113,23 +148,33 @@ inline void finish_particles(const double* kin, const double* acc, Particles& p,
   }
   for (; a < last; ++a) {
     const double* ka = kin + kKinStride * a;
-    const double* sum = acc + kAccStride * a;
+    double* sum = acc + kAccStride * a;
     double fx = sum[0], fy = sum[1], fz = sum[2];
     const double tx = sum[3], ty = sum[4], tz = sum[5];
-    arrays.contacts[a] = static_cast<std::uint16_t>(sum[6]);
-    arrays.force_magnitude[a] = std::sqrt(fx * fx + fy * fy + fz * fz);
+    const double magnitude = std::sqrt(fx * fx + fy * fy + fz * fz);
+    if (!out.to_sums) {
+      arrays.contacts[a] = static_cast<std::uint16_t>(sum[6]);
+      arrays.force_magnitude[a] = magnitude;
+    }
     fx -= drag * ka[4];
     fy -= drag * ka[5];
     fz -= drag * ka[6];
     fx += ka[7] * gx;
     fy += ka[7] * gy;
     fz += ka[7] * gz;
-    arrays.fx[a] = fx;
-    arrays.fy[a] = fy;
-    arrays.fz[a] = fz;
-    arrays.tx[a] = tx;
-    arrays.ty[a] = ty;
-    arrays.tz[a] = tz;
+    const std::size_t c = a - f.first;
+    f.fx[c] = fx;
+    f.fy[c] = fy;
+    f.fz[c] = fz;
+    f.tx[c] = tx;
+    f.ty[c] = ty;
+    f.tz[c] = tz;
+    if (out.to_sums) {
+      sum[0] = fx;
+      sum[1] = fy;
+      sum[2] = fz;
+      sum[7] = magnitude;  // torque and count stay where they are
+    }
     if (t.kick) {
       arrays.vx[a] += fx * arrays.inv_mass[a] * half;
       arrays.vy[a] += fy * arrays.inv_mass[a] * half;
@@ -151,18 +196,22 @@ struct DriftTerms {
 // (position, radius, the velocities the forces see, mass); max_disp_sq rises to the largest
 // squared displacement since the last list build, bad falls to the first particle that moved
 // more than the limit or whose position is not finite.
-inline void drift_particles(Particles& p, double* kin, const DriftTerms& t, std::size_t first,
-                            std::size_t last, double& max_disp_sq, std::uint32_t& bad) {
+// Force and torque come from `forces` (the arrays, or the finish's piece buffer).
+inline void drift_particles(Particles& p, double* kin, const DriftTerms& t,
+                            const ForceColumns& forces, std::size_t first, std::size_t last,
+                            double& max_disp_sq, std::uint32_t& bad) {
   const ParticleArrays arrays(p);
+  const ForceColumns& f = forces;
   const double dt = t.dt, half = t.half_dt, kick = t.kick, limit = t.move_limit_sq;
   std::size_t a = first;
   Lanes disp_max{};
   for (; a + kLanes <= last; a += kLanes) {
     const Lanes im = load_lanes(arrays.inv_mass + a), ii = load_lanes(arrays.inv_inertia + a);
-    const Lanes ax = load_lanes(arrays.fx + a) * im, ay = load_lanes(arrays.fy + a) * im,
-                az = load_lanes(arrays.fz + a) * im;
-    const Lanes bx = load_lanes(arrays.tx + a) * ii, by = load_lanes(arrays.ty + a) * ii,
-                bz = load_lanes(arrays.tz + a) * ii;
+    const std::size_t c = a - f.first;
+    const Lanes ax = load_lanes(f.fx + c) * im, ay = load_lanes(f.fy + c) * im,
+                az = load_lanes(f.fz + c) * im;
+    const Lanes bx = load_lanes(f.tx + c) * ii, by = load_lanes(f.ty + c) * ii,
+                bz = load_lanes(f.tz + c) * ii;
     const Lanes vxa = load_lanes(arrays.vx + a) + ax * half,
                 vya = load_lanes(arrays.vy + a) + ay * half,
                 vza = load_lanes(arrays.vz + a) + az * half;
@@ -212,11 +261,11 @@ inline void drift_particles(Particles& p, double* kin, const DriftTerms& t, std:
   }
   for (std::size_t l = 0; l < kLanes; ++l) max_disp_sq = std::max(max_disp_sq, disp_max[l]);
   for (; a < last; ++a) {
-    const double ax = arrays.fx[a] * arrays.inv_mass[a], ay = arrays.fy[a] * arrays.inv_mass[a],
-                 az = arrays.fz[a] * arrays.inv_mass[a];
-    const double bx = arrays.tx[a] * arrays.inv_inertia[a],
-                 by = arrays.ty[a] * arrays.inv_inertia[a],
-                 bz = arrays.tz[a] * arrays.inv_inertia[a];
+    const std::size_t c = a - f.first;
+    const double ax = f.fx[c] * arrays.inv_mass[a], ay = f.fy[c] * arrays.inv_mass[a],
+                 az = f.fz[c] * arrays.inv_mass[a];
+    const double bx = f.tx[c] * arrays.inv_inertia[a], by = f.ty[c] * arrays.inv_inertia[a],
+                 bz = f.tz[c] * arrays.inv_inertia[a];
     arrays.vx[a] += ax * half;
     arrays.vy[a] += ay * half;
     arrays.vz[a] += az * half;

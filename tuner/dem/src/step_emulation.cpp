@@ -13,10 +13,11 @@ StepTraffic step_traffic(std::size_t particles, std::uint64_t pairs) {
   constexpr double kPerPair = 4 + 4 + 1 + 8 + 8 + 24 + 24;
   // Per particle, the force pass and the drift together (run_steps finishes and drifts a piece
   // of particles while its data is in L1, so each array counts once): the kinematics block read
-  // and rewritten (96 + 96), the sums written and read (64 + 64), force and torque written (48),
-  // |F| (8) and the contact count (2), 1/m and 1/I read (16), v and w read and written (48 + 48),
-  // x read and written (24 + 24), the list build's x0 (24), radius and mass (16).
-  constexpr double kPerParticle = 96 + 96 + 64 + 64 + 48 + 8 + 2 + 16 + 48 + 48 + 24 + 24 + 24 + 16;
+  // and rewritten (96 + 96), the sums written and read (64 + 64: the finish leaves force,
+  // torque, |F| and the contact count in them, not in the particle arrays), 1/m and 1/I read
+  // (16), v and w read and written (48 + 48), x read and written (24 + 24), the list build's x0
+  // (24), radius and mass (16).
+  constexpr double kPerParticle = 96 + 96 + 64 + 64 + 16 + 48 + 48 + 24 + 24 + 24 + 16;
   // Everything a particle has (the block, the sums, about 35 arrays of doubles) and the list's
   // fields per pair.
   constexpr double kParticleFootprint = 96 + 64 + 35 * 8;
