@@ -12,7 +12,8 @@ tables (median T_ALL over all samples; the phases T_s, the slowest thread's loop
 after it), the chunk study's best per stencil and schedule kind, and the larger scenes' time and
 memory per particle. Every number is measured, except in the table of each --emulation file:
 the speed-ups another machine emulated for these thread counts (emulate threads), beside the
-ones measured here at the same variant, with the emulation's error; and in the table of each
+ones measured here at the same variant by the earliest sweep (at-<commit>) and by the later
+ones (detection-16-*.json), with the emulation's error against each; and in the table of each
 --tune file (`tune --threads 16 --predict-only` on another machine): the variant its model
 predicted fastest for this many threads, and each structure's best, beside the regret the chunk
 study here measured for it within its interleaved rounds (for a chunk it did not measure, the
@@ -124,27 +125,36 @@ def large_lines(folder):
     return lines
 
 
-def emulation_lines(path, measured, folder):
+def emulation_lines(path, measured, folder, later=None, later_name=""):
+    """The emulated speed-ups beside those measured here by the earliest sweep (`measured`)
+    and, where given, by the later sweeps (`later`: the code nearer an emulation of today's)."""
     with open(path) as f:
         doc = json.load(f)
     commit = (doc["context"].get("build", {}).get("git_commit") or "?")[:7]
+    later = later or {}
+    extra = (f" measured by {later_name} | error against it |" if later else "")
     lines = [f"### Emulated elsewhere against measured here: `{os.path.relpath(path, folder)}` "
              f"(emulated at {commit})", "",
-             "| variant | threads | measured speed-up | emulated speed-up | emulation's error |",
-             "|---|---|---|---|---|"]
+             "| variant | threads | measured speed-up | emulated speed-up | emulation's error |" +
+             extra, "|---|---|---|---|---|" + ("---|---|" if later else "")]
+
+    def speedup(points, name, t):
+        one, here = points.get((name, 1)), points.get((name, t))
+        return one["total"] / here["total"] if one and here else None
+
     for v in doc["variants"]:
         name = v["variant"]
-        one = measured.get((name, 1))
-        if not one:
-            continue
         for point in v["emulated"]:
-            t = point["threads"]
-            here = measured.get((name, t))
-            if t == 1 or not here:
+            t, emulated = point["threads"], point["speedup"]
+            first, second = speedup(measured, name, t), speedup(later, name, t)
+            if t == 1 or (first is None and second is None):
                 continue
-            speedup = one["total"] / here["total"]
-            lines.append(f"| `{name}` | {t} | {speedup:.2f} | *{point['speedup']:.2f}*† | "
-                         f"{100 * (point['speedup'] / speedup - 1):+.0f} % |")
+            cells = ([f"{first:.2f}", f"*{emulated:.2f}*†", f"{100 * (emulated / first - 1):+.0f} %"]
+                     if first else ["-", f"*{emulated:.2f}*†", "-"])
+            if later:
+                cells += ([f"{second:.2f}", f"{100 * (emulated / second - 1):+.0f} %"]
+                          if second else ["-", "-"])
+            lines.append(f"| `{name}` | {t} | " + " | ".join(cells) + " |")
     lines += ["", "† emulated (docs/emulation.md), not measured."]
     if doc.get("bandwidth"):
         lines += [""] + bandwidth_lines(doc, measured)
@@ -277,10 +287,18 @@ def main():
                          f"SIMD target: {context.get('simd_target', '?')}.")
             lines.append("")
     olds = sorted(glob.glob(os.path.join(args.folder, "at-*", "paper-tables-16.json")))
+    # The later sweeps (the folder's own detection-16-*.json) together, beside the earliest.
+    later = {}
+    for name in ("detection-16-sorted.json", "detection-16-paper.json"):
+        path = os.path.join(args.folder, name)
+        if os.path.exists(path):
+            later.update(runs_of(path)[1])
     for emulation in args.emulation:
-        # Beside the measurement of the code the emulation ran: the earliest sweep here.
+        # Beside the measurement of the code the emulation ran: the earliest sweep here, and
+        # the later sweeps for an emulation of later code.
         _, points = runs_of(olds[0]) if olds else ({}, {})
-        lines += emulation_lines(emulation, points, args.folder) + [""]
+        lines += emulation_lines(emulation, points, args.folder, later,
+                                 "`detection-16-*.json`") + [""]
     for old in olds:
         _, points = runs_of(old)
         lines += speedup_table(points, f"The same at {old.split(os.sep)[-2][3:]}: "
