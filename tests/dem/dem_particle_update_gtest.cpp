@@ -40,18 +40,28 @@ bool same_bits(const A& a, const B& b) {
   return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(double)) == 0;
 }
 
+// What a finish reads: n particles' kinematics blocks and sums, and their arrays.
+struct FinishInputs {
+  std::vector<double> kin, acc;
+  Particles start;
+};
+FinishInputs finish_inputs(std::size_t n, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  FinishInputs in{std::vector<double>(kKinStride * n), std::vector<double>(kAccStride * n), {}};
+  for (double& x : in.kin) x = u(rng);
+  for (double& x : in.acc) x = u(rng);
+  for (std::size_t a = 0; a < n; ++a) {
+    in.kin[kKinStride * a + 7] = 1.0 + 0.5 * u(rng);               // mass
+    in.acc[kAccStride * a + 6] = static_cast<double>(rng() % 12);  // touching contacts
+  }
+  in.start = random_particles(n, rng);
+  return in;
+}
+
 void expect_ranges_agree(const FinishTerms& terms) {
   const std::size_t n = 203;  // not a multiple of eight
-  std::mt19937_64 rng(11);
-  std::uniform_real_distribution<double> u(-1.0, 1.0);
-  std::vector<double> kin(kKinStride * n), acc(kAccStride * n);
-  for (double& x : kin) x = u(rng);
-  for (double& x : acc) x = u(rng);
-  for (std::size_t a = 0; a < n; ++a) {
-    kin[kKinStride * a + 7] = 1.0 + 0.5 * u(rng);               // mass
-    acc[kAccStride * a + 6] = static_cast<double>(rng() % 12);  // touching contacts
-  }
-  const Particles start = random_particles(n, rng);
+  auto [kin, acc, start] = finish_inputs(n, 11);
   Particles whole = start, one_by_one = start;
   finish_particles(kin.data(), acc.data(), whole, terms, 0, n, {ForceColumns::of(whole), false});
   for (std::size_t a = 0; a < n; ++a) {
@@ -92,17 +102,8 @@ TEST(DemParticleUpdate, FinishWithoutKickVelocitiesStay) {
 // the arrays it does not write alone.
 TEST(DemParticleUpdate, FinishToTheSumsGivesWhatTheArraysGet) {
   const std::size_t n = 203, first = 5, last = 200;  // a piece not at 0, not a multiple of 8
-  std::mt19937_64 rng(17);
-  std::uniform_real_distribution<double> u(-1.0, 1.0);
-  std::vector<double> kin(kKinStride * n), acc(kAccStride * n);
-  for (double& x : kin) x = u(rng);
-  for (double& x : acc) x = u(rng);
-  for (std::size_t a = 0; a < n; ++a) {
-    kin[kKinStride * a + 7] = 1.0 + 0.5 * u(rng);
-    acc[kAccStride * a + 6] = static_cast<double>(rng() % 12);
-  }
+  auto [kin, acc, start] = finish_inputs(n, 17);
   const FinishTerms terms{0.3, {0.1, -0.2, -9.81}, 1e-5, true};
-  const Particles start = random_particles(n, rng);
   Particles to_arrays = start, to_sums = start;
   std::vector<double> sums = acc;
   finish_particles(kin.data(), acc.data(), to_arrays, terms, first, last,
