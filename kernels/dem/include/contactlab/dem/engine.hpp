@@ -152,7 +152,6 @@ class Engine {
   std::uint64_t run_steps(std::uint64_t steps, BatchEnd end = BatchEnd::kAfterSteps);
 
   const Particles& particles() const { return particles_; }
-  Particles& mutable_particles() { return particles_; }
   const PairList& pairs() const { return pairs_; }
   const EngineSettings& settings() const { return settings_; }
   const PairCoefficients& coefficients() const { return coefficients_; }
