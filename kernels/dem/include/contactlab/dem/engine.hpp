@@ -267,8 +267,8 @@ class Engine {
   double drifted_disp_sq_ = 0.0;
   std::uint32_t drifted_bad_ = UINT32_MAX;
   // Set when that finish left force, torque, |F| and the contact count in acc_, not in the
-  // particle arrays (it drifted the next step: nothing reads them before the next finish but a
-  // rebuild); store_forces puts them there.
+  // particle arrays (it drifted the next step: before the next finish only a rebuild or a
+  // failure reads them); store_forces puts them there.
   bool forces_in_sums_ = false;
   void store_forces();
   AlignedVector<double> kin_;  // what the pair loop reads per particle, side by side
