@@ -25,35 +25,38 @@ nlohmann::json emulation_document(const ThreadEmulation& emulation,
   doc["label"] = "emulated";
   doc["context"] = context;
   doc["scene"] = scene;
+  // Named: the bandwidth sentence once came in the place of "{most}" (arguments out of order).
   doc["method"] = fmt::format(
-      "Measured here: every variant at {} thread(s), {} interleaved rounds (medians with 95% "
-      "order-statistic intervals). Emulated: the detection loop's exact work per iteration "
-      "priced by machine costs calibrated on small calibration scenes (not this one) at up to "
-      "{} threads, scaled so that the one-thread replay equals this scene's measured one-thread "
-      "T_c less its output copy, then replayed under the variant's schedule as libgomp deals it "
-      "(static, static,k, dynamic,k, guided,k) or as the balanced blocks, after each thread's "
-      "weighing of its slice at the seconds per weighed iteration measured at the most threads; "
-      "a deal in chunks (static,k and dynamic,k) at P "
-      "threads has its loop scaled by a locality factor measured here: thread 0's share of "
-      "static,k at P threads timed alone at one thread, less a run with no block, over its "
-      "replay (the caches and blocks of homes a thread loses by jumping between chunks); plus the "
-      "rows the schedule leaves to copy after "
-      "the loop at P threads (the calibrated cost per output entry); plus the rest of the "
-      "assembly after the loop (row offsets, the half stencil's reverse entries) = serial + "
-      "parallel/P fitted from its measured 1- and {}-thread times less the copy; T_s = serial + "
-      "parallel/P fitted from the measured 1- and "
-      "{}-thread T_s. {}Not modelled: shared caches as threads are added, and caches that the "
-      "split work comes to fit (superlinear speed-up).",
-      fmt::join(options.measured_threads, ", "), options.rounds, emulation.calibration.threads,
-      options.memory
-          ? "Bandwidth (the machine file in `bandwidth`): every phase (setup, loop, the rows "
-            "after it) takes at least its bytes, counted from the exact work and the data "
-            "layout, over the bandwidth its threads draw: the probe's at the thread counts it "
-            "measured, beyond them a saturating curve towards the stated ceiling. "
-          : "Not modelled: memory bandwidth (no machine file): beyond this machine's cores an "
-            "emulated speed-up is what the schedule's balance allows. ",
-      *std::max_element(options.measured_threads.begin(), options.measured_threads.end()),
-      *std::max_element(options.measured_threads.begin(), options.measured_threads.end()));
+      "Measured here: every variant at {measured} thread(s), {rounds} interleaved rounds "
+      "(medians with 95% order-statistic intervals). Emulated: the detection loop's exact work "
+      "per iteration priced by machine costs calibrated on small calibration scenes (not this "
+      "one) at up to {calibrated} threads, scaled so that the one-thread replay equals this "
+      "scene's measured one-thread T_c less its output copy, then replayed under the variant's "
+      "schedule as libgomp deals it (static, static,k, dynamic,k, guided,k) or as the balanced "
+      "blocks, after each thread's weighing of its slice at the seconds per weighed iteration "
+      "measured at the most threads; a deal in chunks (static,k and dynamic,k) at P threads has "
+      "its loop scaled by a locality factor measured here: thread 0's share of static,k at P "
+      "threads timed alone at one thread, less a run with no block, over its replay (the caches "
+      "and blocks of homes a thread loses by jumping between chunks); plus the rows the "
+      "schedule leaves to copy after the loop at P threads (the calibrated cost per output "
+      "entry); plus the rest of the assembly after the loop (row offsets, the half stencil's "
+      "reverse entries) = serial + parallel/P fitted from its measured 1- and {most}-thread "
+      "times less the copy; T_s = serial + parallel/P fitted from the measured 1- and "
+      "{most}-thread T_s. {bandwidth}Not modelled: shared caches as threads are added, and "
+      "caches that the split work comes to fit (superlinear speed-up).",
+      fmt::arg("measured", fmt::join(options.measured_threads, ", ")),
+      fmt::arg("rounds", options.rounds), fmt::arg("calibrated", emulation.calibration.threads),
+      fmt::arg("most",
+               *std::max_element(options.measured_threads.begin(), options.measured_threads.end())),
+      fmt::arg("bandwidth",
+               options.memory
+                   ? "Bandwidth (the machine file in `bandwidth`): every phase (setup, loop, the "
+                     "rows after it) takes at least its bytes, counted from the exact work and "
+                     "the data layout, over the bandwidth its threads draw: the probe's at the "
+                     "thread counts it measured, beyond them a saturating curve towards the "
+                     "stated ceiling. "
+                   : "Not modelled: memory bandwidth (no machine file): beyond this machine's "
+                     "cores an emulated speed-up is what the schedule's balance allows. "));
   doc["measured_threads"] = options.measured_threads;
   doc["bandwidth"] = options.memory ? options.memory->json() : nlohmann::json(nullptr);
   nlohmann::json calibration = nlohmann::json::object();
