@@ -45,6 +45,8 @@ def runs_of(path):
             "samples": len(s["total_s"]),
             "work": run.get("work_counts", {}),
             "scene_n": p["scene"]["n"],
+            # T_s's and T_c's parts (samples.parts_s), where the run recorded them.
+            "parts": {k: statistics.median(v) for k, v in s.get("parts_s", {}).items()},
         }
     return doc["context"], points
 
@@ -69,6 +71,32 @@ def speedup_table(points, title):
         cells.append(f"{one['assembly']:.4f} -> {top['assembly']:.4f}")
         lines.append(f"| `{v}` | " + " | ".join(cells) + " |")
     return lines
+
+
+def parts_table(points):
+    """Where T_s goes as threads are added: its parts at one thread and at each count, with
+    their speed-ups (runs that recorded samples.parts_s only; none for older files)."""
+    parts = ("registration", "reorder")
+    variants = sorted({v for (v, t), p in points.items()
+                       if t == 1 and all(k in p["parts"] for k in parts)})
+    if not variants:
+        return []
+    threads = sorted({t for _, t in points})
+    lines = ["T_s's parts (`samples.parts_s`): registration (keys, radix sort, cell index) and "
+             "reorder (coordinates into slot order), median seconds (x = speed-up over one "
+             "thread); the rest of T_s is single precision's conversion.", "",
+             "| variant | part | " + " | ".join(f"{t} thr [s] (x)" for t in threads) + " |",
+             "|---|---|" + "---|" * len(threads)]
+    for v in variants:
+        one = points[(v, 1)]["parts"]
+        for part in parts:
+            cells = []
+            for t in threads:
+                p = points.get((v, t))
+                at = p["parts"].get(part) if p else None
+                cells.append(f"{at:.5f} ({one[part] / at:.2f})" if at else "-")
+            lines.append(f"| `{v}` | {part} | " + " | ".join(cells) + " |")
+    return lines + [""]
 
 
 def best_over_best(points):
@@ -282,6 +310,7 @@ def main():
             context, points = runs_of(path)
             build = context.get("build", {})
             lines += speedup_table(points, f"{title}: `{name}`") + [""]
+            lines += parts_table(points)
             lines += best_over_best(points) + [""]
             lines.append(f"Build: {build.get('flags', '?')} (native: {build.get('native')}); "
                          f"SIMD target: {context.get('simd_target', '?')}.")

@@ -164,6 +164,7 @@ void CellRegistry::assign(const CellGrid& grid, const Scene& scene, SortedCoordi
   } else {
     occupied = {};
   }
+  const double start = omp_get_wtime();
   int key_bits = 1;
   while (key_bits < 64 && (std::uint64_t{1} << key_bits) < grid.key_count()) ++key_bits;
   slot_particle.resize(n);
@@ -177,6 +178,8 @@ void CellRegistry::assign(const CellGrid& grid, const Scene& scene, SortedCoordi
     sort_and_index(grid, scene, team, key_bits, wide_buffer_, wide_scratch_);
   }
   if (hashed) occupied.build_table(static_cast<int>(team));
+  const double registered = omp_get_wtime();
+  registration_s = registered - start;
 
   if (sorted) {
     // The paper's reordering: coordinates copied into slot order.
@@ -213,6 +216,7 @@ void CellRegistry::assign(const CellGrid& grid, const Scene& scene, SortedCoordi
     for (std::size_t s = 0; s < n; ++s)
       particle_slot[slot_particle[s]] = static_cast<std::uint32_t>(s);
   }
+  reorder_s = omp_get_wtime() - registered;
 }
 
 namespace {

@@ -192,6 +192,8 @@ CellGrid ContactDetector::prepare(const Scene& scene, const DetectOptions& optio
   registry_.assign(grid, scene, working_is_sorted_ ? &sorted_ : nullptr, run.threads,
                    use_hashed_index(options.variant.grid, grid, scene.size()));
   run.setup_s = omp_get_wtime() - setup_start;
+  run.registration_s = registry_.registration_s;
+  run.reorder_s = registry_.reorder_s;
   run.max_cell_occupancy = registry_.max_occupancy;
   run.hashed_index = registry_.hashed;
   run.index_bytes = registry_.index_bytes();

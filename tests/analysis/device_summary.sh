@@ -26,6 +26,15 @@ grep -q '| `particle/unsorted/full/static` | 16 | 33.70 | 92.7 | \*229.8\*† |'
   --tune results/oxide-virtual-turin-like-processor-2c/tune-predict-16-paper.json > /dev/null
 grep -q "| model's choice | \`particle/sorted/full/dynamic,512\` | \*0.0060\*† | not measured; \`dynamic,256\` +45%, \`dynamic,1024\` +14% |" "$out/tune.md"
 grep -q "| a structure's best | \`particle/sorted/half/dynamic,256\` | \*0.0090\*† | +89% |" "$out/tune.md"
+# A sweep that recorded T_s's parts (samples.parts_s) gets their table; the 16-core files,
+# from before them, get none.
+/usr/bin/python3 analysis/device_summary.py tests/analysis/fixture/parts-2c --out "$out/parts.md" > /dev/null
+grep -q "^T_s's parts" "$out/parts.md"
+grep -q '| `particle/sorted/half/static` | reorder | 0\.[0-9]* (1\.00) | 0\.[0-9]* ([0-9.]*) |' "$out/parts.md"
+if grep -q "^T_s's parts" "$out/summary.md"; then
+  echo "a parts table from files without parts" >&2
+  exit 1
+fi
 mkdir -p "$out/empty"
 if /usr/bin/python3 analysis/device_summary.py "$out/empty" 2> "$out/err.txt"; then
   echo "an empty folder was summarised" >&2

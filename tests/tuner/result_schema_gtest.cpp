@@ -220,6 +220,46 @@ TEST(ResultSchema, VisitsOfLaterRoundsJoinTheRecordWithTheirRound) {
   EXPECT_NE(record.message.find("contact count differs between rounds"), std::string::npos);
 }
 
+// T_s's parts (the sort and the reordering) and T_c's assembly, per repetition and summarised
+// under their names, so that a run on many cores says which part stops scaling (issue #47).
+TEST(ResultSchema, PartsOfThePhasesArePerRepetitionAndSummarised) {
+  const ResultFile file = sample_result();
+  const RunRecord& run = file.runs[0];
+  const RunSamples& s = run.samples;
+  for (const char* name : {"registration", "reorder", "assembly"}) {
+    ASSERT_EQ(s.parts_s.count(name), 1u) << name;
+    ASSERT_EQ(s.parts_s.at(name).size(), s.setup_s.size()) << name;
+    EXPECT_EQ(json(run.phases.at(name)), json(summarize(s.parts_s.at(name), 0.95))) << name;
+  }
+  for (std::size_t r = 0; r < s.setup_s.size(); ++r) {
+    const double registration = s.parts_s.at("registration")[r];
+    const double reorder = s.parts_s.at("reorder")[r];
+    EXPECT_GT(registration, 0.0);
+    EXPECT_GT(reorder, 0.0);
+    EXPECT_LE(registration + reorder, s.setup_s[r]) << "both timed inside T_s";
+    EXPECT_LE(s.parts_s.at("assembly")[r], s.detect_s[r]);
+  }
+  const json j = file;
+  EXPECT_EQ(json(parse_result(j)), j);
+  json bad = j;
+  bad["runs"][0]["samples"]["parts_s"]["reorder"].erase(0);
+  EXPECT_EQ(rejection(bad),
+            "$.runs[0].samples: parts_s: reorder must have one entry per repetition");
+  // A file from before the parts reads with none, and a visit without them drops them.
+  json old = j;
+  old["runs"][0]["samples"].erase("parts_s");
+  EXPECT_TRUE(parse_result(old).runs[0].samples.parts_s.empty());
+  RunRecord joined = run;
+  add_visit(joined, run, 1);
+  EXPECT_EQ(joined.samples.parts_s.at("reorder").size(), 2 * s.setup_s.size());
+  RunRecord older = run;
+  older.samples.parts_s.clear();
+  add_visit(joined, older, 2);
+  EXPECT_TRUE(joined.samples.parts_s.empty());
+  EXPECT_EQ(joined.phases.count("reorder"), 0u);
+  EXPECT_EQ(joined.phases.count("setup"), 1u);
+}
+
 TEST(ResultSchema, FileErrorsNameTheFile) {
   test::TempDir dir;
   const std::string path = dir.file("broken.json");
@@ -259,7 +299,8 @@ TEST(ResultSchema, DocumentedExampleIsValid) {
 TEST(ResultSchema, RunsNameTheirPhasesAndWorkCounts) {
   const ResultFile parsed = parse_result(sample_json());
   const RunRecord& run = parsed.runs[0];
-  ASSERT_EQ(run.phases.size(), 2u);
+  // T_s and T_c, and their parts (PartsOfThePhasesArePerRepetitionAndSummarised).
+  ASSERT_EQ(run.phases.size(), 5u);
   EXPECT_EQ(json(run.phases.at("setup")), json(run.aggregates->setup_s));
   EXPECT_EQ(json(run.phases.at("detect")), json(run.aggregates->detect_s));
   EXPECT_EQ(run.work_counts.at("candidate_tests"), run.work->candidate_tests);
@@ -296,8 +337,8 @@ TEST(ResultSchema, RunsWithoutPhasesStillRead) {
 // with their empty values).
 TEST(ResultSchema, CommittedResultFilesRead) {
   namespace fs = std::filesystem;
-  const std::set<std::string> newer{"phases",   "work_counts", "executable",
-                                    "code_isa", "simd_target", "candidate_tests"};
+  const std::set<std::string> newer{"phases",      "work_counts",     "executable", "code_isa",
+                                    "simd_target", "candidate_tests", "parts_s"};
   int files = 0;
   for (const auto& entry :
        fs::recursive_directory_iterator(fs::path(CONTACTLAB_SOURCE_DIR) / "results")) {

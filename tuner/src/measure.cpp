@@ -30,6 +30,7 @@ void summarize_samples(RunRecord& record, double level) {
   a.repetitions = static_cast<int>(s.total_s.size());
   record.phases["setup"] = a.setup_s;
   record.phases["detect"] = a.detect_s;
+  for (const auto& [name, values] : s.parts_s) record.phases[name] = summarize(values, level);
 }
 
 }  // namespace
@@ -60,6 +61,13 @@ RunRecord measure_detection(ContactDetector& detector, const Scene& scene,
         s.total_s.push_back(last.total_s());
         s.thread_busy_s.push_back(last.thread_busy_s);
         s.imbalance.push_back(load_imbalance(last.thread_busy_s));
+        const double loop_s =
+            last.thread_busy_s.empty()
+                ? 0.0
+                : *std::max_element(last.thread_busy_s.begin(), last.thread_busy_s.end());
+        s.parts_s["registration"].push_back(last.registration_s);
+        s.parts_s["reorder"].push_back(last.reorder_s);
+        s.parts_s["assembly"].push_back(std::max(0.0, last.detect_s - loop_s));
         contact_counts.push_back(last.contact_pairs);
         return last.total_s();
       });
@@ -120,6 +128,18 @@ void add_visit(RunRecord& record, const RunRecord& visit, int round) {
   append(s.total_s, v.total_s);
   append(s.thread_busy_s, v.thread_busy_s);
   append(s.imbalance, v.imbalance);
+  // A part that only one side recorded (a file from before parts) is dropped: its entries
+  // would no longer line up with the repetitions.
+  for (auto it = s.parts_s.begin(); it != s.parts_s.end();) {
+    const auto from = v.parts_s.find(it->first);
+    if (from == v.parts_s.end() || from->second.size() != v.setup_s.size()) {
+      record.phases.erase(it->first);
+      it = s.parts_s.erase(it);
+    } else {
+      append(it->second, from->second);
+      ++it;
+    }
+  }
   s.round->insert(s.round->end(), v.total_s.size(), round);
   RunAggregates& a = *record.aggregates;
   a.warmup_runs += visit.aggregates->warmup_runs;

@@ -234,10 +234,13 @@ struct FieldTable<RunParameters> {
 template <>
 struct FieldTable<RunSamples> {
   using T = RunSamples;
-  static constexpr auto kFields =
-      std::tuple{field("setup_s", &T::setup_s),     field("detect_s", &T::detect_s),
-                 field("total_s", &T::total_s),     field("thread_busy_s", &T::thread_busy_s),
-                 field("imbalance", &T::imbalance), field("round", &T::round).only_when_set()};
+  static constexpr auto kFields = std::tuple{field("setup_s", &T::setup_s),
+                                             field("detect_s", &T::detect_s),
+                                             field("total_s", &T::total_s),
+                                             field("thread_busy_s", &T::thread_busy_s),
+                                             field("imbalance", &T::imbalance),
+                                             field("round", &T::round).only_when_set(),
+                                             field("parts_s", &T::parts_s).may_be_absent()};
   static void validate(const JsonIn& in, const T& v) {
     const std::size_t n = v.setup_s.size();
     if (v.detect_s.size() != n || v.total_s.size() != n || v.thread_busy_s.size() != n ||
@@ -248,6 +251,10 @@ struct FieldTable<RunSamples> {
     }
     if (v.round && std::any_of(v.round->begin(), v.round->end(), [](int r) { return r < 0; }))
       in.fail("round: rounds are numbered from 0");
+    for (const auto& [name, values] : v.parts_s) {
+      if (name.empty()) in.fail("parts_s: a part without a name");
+      if (values.size() != n) in.fail("parts_s: " + name + " must have one entry per repetition");
+    }
   }
 };
 

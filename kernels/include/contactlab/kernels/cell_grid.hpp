@@ -194,6 +194,9 @@ struct CellRegistry {
   // Sum over cells of occupancy^2: divided by the particle count, the mean occupancy of a
   // particle's own cell (itself included), what a particle's stencil holds per cell.
   std::uint64_t occupancy_squares = 0;
+  // The last assign's parts, seconds: the keys, the sort and the cell index; the reordering (or
+  // the unsorted layout's inverse map). Where T_s goes as threads are added (issue #47).
+  double registration_s = 0.0, reorder_s = 0.0;
 
   // Registers the particles. With `sorted`, also copies the coordinates (and diameters) into
   // slot order: the paper's reordering. particle_slot is filled only without it (the

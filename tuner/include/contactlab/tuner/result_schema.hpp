@@ -63,6 +63,10 @@ struct RunSamples {
   // The sweep round each repetition belongs to (experiments with "rounds"; absent otherwise):
   // ratios between two runs are taken within a round.
   std::optional<std::vector<int>> round;
+  // Parts of the phases by name, one entry per repetition: "registration" and "reorder" of T_s,
+  // "assembly" of T_c (after the slowest thread's loop). Each is summarised in the run's
+  // `phases` under its name. Absent in files written before them.
+  std::map<std::string, std::vector<double>> parts_s;
 };
 
 struct RunAggregates {
