@@ -41,7 +41,10 @@ nlohmann::json emulation_document(const ThreadEmulation& emulation,
       "schedule leaves to copy after the loop at P threads (the calibrated cost per output "
       "entry); plus the rest of the assembly after the loop (row offsets, the half stencil's "
       "reverse entries) = serial + parallel/P fitted from its measured 1- and {most}-thread "
-      "times less the copy; T_s = serial + parallel/P fitted from the measured 1- and "
+      "times less the copy, or, for the half stencil under a deal whose threads pass their "
+      "reverse entries on to the rows' owners (chunks, dynamic, guided, unsorted), work/P + "
+      "exchange (P-1)/P^2 fitted from the same two times; T_s = serial + parallel/P fitted from "
+      "the measured 1- and "
       "{most}-thread T_s. {bandwidth}Not modelled: shared caches as threads are added, and "
       "caches that the split work comes to fit (superlinear speed-up).",
       fmt::arg("measured", fmt::join(options.measured_threads, ", ")),

@@ -9,12 +9,15 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 
+#include "contactlab/tuner_model/emulation.hpp"
 #include "program_test_support.hpp"
 
 namespace contactlab::test {
 namespace {
 
 using nlohmann::json;
+using tuner::AmdahlPhase;
+using tuner::ExchangePhase;
 
 // The tune tests' cache (fixture tune_calibration): its calibration covers the sorted
 // particle and cell loops, so these tests time only their own scene.
@@ -185,6 +188,37 @@ TEST(EmulateCli, TheHalfStencilsOneThreadIsItsMeasurement) {
   EXPECT_NEAR(v["emulated"][0]["detect_s"].get<double>(),
               v["measured"][0]["detect_s"]["median"].get<double>(), 1e-12);
   for (const auto& p : v["emulated"]) EXPECT_EQ(p["output_s"].get<double>(), 0.0) << p;
+}
+
+// Under chunks the half stencil's threads pass their reverse entries on to the rows' owners:
+// its assembly is fitted as work / P + exchange (P - 1) / P^2 through its 1- and 2-thread times
+// (ExchangePhase), the block deal's as serial + parallel / P (AmdahlPhase).
+TEST(EmulateCli, TheHalfStencilsChunksPassTheirReverseEntriesOn) {
+  TempDir dir;
+  const std::string out = dir.file("half.json");
+  const auto r = run_command(
+      with_cache() + contactlab_exe() + " emulate threads" + kScene +
+      " --variants particle/sorted/half/static,64,particle/sorted/half/static --threads 1,2,4,16"
+      " --measured-threads 1,2 --rounds 1 --chunk-threads 2 --json " +
+      out);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const json doc = json::parse(slurp(out));
+  for (const bool chunked : {true, false}) {
+    const json& points = doc["variants"][chunked ? 0 : 1]["emulated"];
+    ASSERT_EQ(points.size(), 4u);
+    const double one = points[0]["assembly_s"].get<double>();
+    const double two = points[1]["assembly_s"].get<double>();
+    for (const auto& p : points) {
+      const double threads = p["threads"].get<double>();
+      const double expected = chunked
+                                  ? ExchangePhase::fit(one, 2, two).at(static_cast<int>(threads))
+                                  : AmdahlPhase::fit(one, 2, two).at(static_cast<int>(threads));
+      EXPECT_NEAR(p["assembly_s"].get<double>(), expected, 1e-12 + 1e-9 * expected)
+          << (chunked ? "static,64 " : "static ") << p;
+    }
+  }
+  EXPECT_NE(doc["method"].get<std::string>().find("work/P + exchange (P-1)/P^2"),
+            std::string::npos);
 }
 
 TEST(EmulateCli, MpiPredictsEverySeriesAndChecksAMeasuredRun) {

@@ -45,6 +45,26 @@ TEST(AmdahlPhase, ClampsWhatNoSplitExplains) {
   EXPECT_THROW(AmdahlPhase{}.at(0), std::invalid_argument);
 }
 
+// A two-thread time equal to the one-thread time: half the entries passed on cost as much as the
+// work that halved. t(P) = 1 / P + 2 (P - 1) / P^2: 1 at 2, 0.25 + 0.375 at 4, 1/16 + 30/256.
+TEST(ExchangePhase, FitsTwoPointsAndPassesOnAllButItsOwnShare) {
+  const ExchangePhase phase = ExchangePhase::fit(1.0, 2, 1.0);
+  EXPECT_DOUBLE_EQ(phase.work_s, 1.0);
+  EXPECT_DOUBLE_EQ(phase.exchange_s, 2.0);
+  EXPECT_DOUBLE_EQ(phase.at(1), 1.0);
+  EXPECT_DOUBLE_EQ(phase.at(2), 1.0);
+  EXPECT_DOUBLE_EQ(phase.at(4), 0.625);
+  EXPECT_DOUBLE_EQ(phase.at(16), 1.0 / 16 + 30.0 / 256);
+  // From 4 threads: 0.5 = 1/4 + x 3/16  =>  x = 4/3.
+  EXPECT_DOUBLE_EQ(ExchangePhase::fit(1.0, 4, 0.5).exchange_s, 4.0 / 3);
+  // Falling as 1 / P or faster: nothing passed on.
+  EXPECT_DOUBLE_EQ(ExchangePhase::fit(1.0, 2, 0.4).exchange_s, 0.0);
+  EXPECT_DOUBLE_EQ(ExchangePhase::fit(1.0, 2, 0.4).at(8), 0.125);
+  EXPECT_THROW(ExchangePhase::fit(1.0, 1, 0.5), std::invalid_argument);
+  EXPECT_THROW(ExchangePhase::fit(1.0, 2, 0.0), std::invalid_argument);
+  EXPECT_THROW(ExchangePhase{}.at(0), std::invalid_argument);
+}
+
 TEST(AnchoredLoop, ScalesTheReplayToTheMeasuredOneThreadTime) {
   const std::vector<std::uint32_t> trace = fig6_trace();
   const PreparedWork work{WorkView(trace)};

@@ -22,6 +22,22 @@ AmdahlPhase AmdahlPhase::fit(double one_thread_s, int p, double p_threads_s) {
   return {one_thread_s - parallel, parallel};
 }
 
+double ExchangePhase::at(int threads) const {
+  if (threads < 1) throw std::invalid_argument("ExchangePhase: threads must be >= 1");
+  const double p = threads;
+  return work_s / p + exchange_s * (p - 1.0) / (p * p);
+}
+
+ExchangePhase ExchangePhase::fit(double one_thread_s, int p, double p_threads_s) {
+  if (p <= 1) throw std::invalid_argument("ExchangePhase::fit: the second point needs p > 1");
+  if (!(one_thread_s > 0.0) || !(p_threads_s > 0.0)) {
+    throw std::invalid_argument("ExchangePhase::fit: times must be > 0");
+  }
+  // tp = t1 / p + x (p - 1) / p^2  =>  x = (tp - t1 / p) p^2 / (p - 1).
+  const double q = p;
+  return {one_thread_s, std::max(0.0, (p_threads_s - one_thread_s / q) * q * q / (q - 1.0))};
+}
+
 AnchoredLoop::AnchoredLoop(const PreparedWork& work, const MachineCosts& costs,
                            const Schedule& schedule, double one_thread_s)
     : work_(work), costs_(costs) {

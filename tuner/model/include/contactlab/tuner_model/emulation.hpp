@@ -36,6 +36,24 @@ struct AmdahlPhase {
   static AmdahlPhase serial(double one_thread_s) { return {one_thread_s, 0.0}; }
 };
 
+// A phase whose work divides over threads and whose entries, but each thread's own share, are
+// passed on to the thread that owns them: t(P) = work / P + exchange (P - 1) / P^2, where
+// (P - 1) / P of a thread's 1 / P of the entries belong to other threads when ownership does not
+// follow the work's deal. The half stencil's assembly under chunks or a dynamic deal is one (its
+// reverse entries go to the rows of the thread that owns them): from 1 and 2 threads an Amdahl
+// fit called it all serial (its two-thread time no shorter than one), and the 16-core Xeon's
+// static,200 assembly ran 0.73, 0.41 and 0.25 of its one-thread time at 4, 8 and 16 threads,
+// where this law from its own 1 and 2 threads gives 0.67, 0.37 and 0.19.
+struct ExchangePhase {
+  double work_s = 0.0;           // at one thread, where nothing is passed on
+  double exchange_s = 0.0;       // what passing every entry on would add
+  double at(int threads) const;  // throws std::invalid_argument for threads < 1
+  // From the phase's times at 1 and at P > 1 threads; the exchange is clamped at 0 (a time that
+  // falls as 1 / P or faster passes nothing on). Throws std::invalid_argument for p <= 1 or a
+  // time <= 0.
+  static ExchangePhase fit(double one_thread_s, int p, double p_threads_s);
+};
+
 // A loop's trace anchored to its measured one-thread time.
 class AnchoredLoop {
  public:
