@@ -33,6 +33,14 @@ double copied_output_share(const Variant& variant, int threads) {
   return writes_first_rows_in_place(variant, threads) ? 1.0 - 1.0 / threads : 1.0;
 }
 
+bool passes_reverse_entries_on(const Variant& variant, int threads) {
+  const Schedule& schedule = variant.schedule;
+  const bool homes_in_runs = variant.order != Order::kUnsorted &&
+                             (schedule.kind == ScheduleKind::kBalanced ||
+                              (schedule.kind == ScheduleKind::kStatic && schedule.chunk == 0));
+  return variant.stencil == Stencil::kHalf && threads > 1 && !homes_in_runs;
+}
+
 namespace {
 
 using pair_ops::ContactOp;

@@ -395,5 +395,22 @@ TEST(Detector, CopiedOutputShareFollowsWhereThreadZeroWritesInPlace) {
   EXPECT_TRUE(writes_first_rows_in_place(parse_variant("cell/morton/full/static"), 2));
 }
 
+// The half stencil's threads pass reverse entries on where their homes are not runs of rows
+// back to back (choose_row_blocks): chunks, dynamic or guided deals, unsorted particles.
+TEST(Detector, ReverseEntriesArePassedOnWhereRowsAreNotTheHomes) {
+  auto passes = [](const char* variant, int threads) {
+    return passes_reverse_entries_on(parse_variant(variant), threads);
+  };
+  EXPECT_TRUE(passes("particle/sorted/half/static,200", 2));
+  EXPECT_TRUE(passes("particle/sorted/half/dynamic,1024", 16));
+  EXPECT_TRUE(passes("particle/sorted/half/guided,8", 4));
+  EXPECT_TRUE(passes("particle/unsorted/half/static", 2));
+  EXPECT_FALSE(passes("particle/sorted/half/static", 16));  // the block: rows are the homes
+  EXPECT_FALSE(passes("cell/sorted/half/static", 16));
+  EXPECT_FALSE(passes("particle/morton/half/balanced", 8));
+  EXPECT_FALSE(passes("particle/sorted/half/static,200", 1));   // one thread passes nothing
+  EXPECT_FALSE(passes("particle/sorted/full/static,200", 16));  // no reverse entries
+}
+
 }  // namespace
 }  // namespace contactlab::test

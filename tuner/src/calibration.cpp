@@ -340,11 +340,27 @@ Calibration calibrate_machine(const TuneOptions& options, int threads,
       }
       return 0.0;
     };
+    // The half stencil's exchange: the low-degree scene's dynamic,64 assembly against its
+    // block's at the same thread count (the dynamic deal passes (t - 1) / t of the reverse
+    // entries on; the block's rows are its homes).
+    auto assembly_at = [&](int t, const Schedule& schedule) {
+      for (const Point& p : points) {
+        if (p.structure == st && p.scene == kLowDegreeScene && p.threads == t &&
+            p.schedule == schedule)
+          return median(p.assembly_s);
+      }
+      return 0.0;
+    };
     std::vector<OutputCost> output;
     output.reserve(thread_counts.size());
     for (const int t : thread_counts) {
+      const Schedule passing{ScheduleKind::kDynamic, 64};
+      const double exchange =
+          passes_reverse_entries_on(variant_of(st, passing), t)
+              ? fit_exchange(assembly_at(t, passing), assembly_at(t, Schedule{}), t)
+              : 0.0;
       output.push_back({t, degrees[kLowDegreeScene], per_entry(kLowDegreeScene, t),
-                        degrees[kHighDegreeScene], per_entry(kHighDegreeScene, t)});
+                        degrees[kHighDegreeScene], per_entry(kHighDegreeScene, t), exchange});
     }
     calibration.structures[structure_key(structure)] = {
         fit.costs, fit.rms_relative_error, static_cast<int>(runs.size()), std::move(output)};

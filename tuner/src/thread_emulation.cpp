@@ -54,17 +54,6 @@ bool dealt_in_chunks(const Schedule& schedule) {
          !(schedule.kind == ScheduleKind::kStatic && schedule.chunk == 0);
 }
 
-// Whether the half stencil's threads assemble the rows they were home to (one run of
-// consecutive rows each, back to back in thread order: a block deal of sorted particles or
-// cells; detector_rows.cpp, choose_row_blocks), or pass each reverse entry on to the thread
-// that owns its row (chunks, a dynamic or guided deal, unsorted particles).
-bool rows_follow_homes(const Variant& variant) {
-  const Schedule& schedule = variant.schedule;
-  return variant.order != Order::kUnsorted &&
-         (schedule.kind == ScheduleKind::kBalanced ||
-          (schedule.kind == ScheduleKind::kStatic && schedule.chunk == 0));
-}
-
 // Per variant: its trace and the calibrated costs of its structure.
 struct VariantModel {
   LoopWork work;
@@ -247,7 +236,7 @@ ThreadEmulation emulate_threads(const Scene& scene, double diameter,
     // serial + parallel / P, so that work per thread that does not fall with P shows as serial.
     // (Replaying the loop alone, the emulation gave particle/sorted/half/static 8.5x at 16
     // threads where 16 cores measured 3.66x: its assembly then scanned N x P counts.) Where the
-    // half stencil's threads pass their reverse entries on (rows_follow_homes), the entries
+    // half stencil's threads pass their reverse entries on (passes_reverse_entries_on), the entries
     // passed grow as (P - 1) / P: fitted as an exchange (emulation.hpp, ExchangePhase), not as
     // serial work (fitted so, its static,200 assembly emulated 0.0610 s at every P, and the
     // variant 2.53x at 16 threads where 16 cores measured 6.26x).
@@ -255,7 +244,7 @@ ThreadEmulation emulate_threads(const Scene& scene, double diameter,
       return std::max(
           median(samples[i][j].assembly) - output_s(measured_threads[j], variant.schedule), 1e-9);
     };
-    const bool exchanged = variant.stencil == Stencil::kHalf && !rows_follow_homes(variant);
+    const bool exchanged = passes_reverse_entries_on(variant, 2);
     const int widest = measured_threads[most];
     const AmdahlPhase amdahl = widest > 1
                                    ? AmdahlPhase::fit(assembly_rest(0), widest, assembly_rest(most))

@@ -25,8 +25,8 @@ constexpr int kCacheSchemaVersion = 1;
 // A calibration stored by a cost model with other constants (another kCostModelVersion) is a
 // cache miss.
 // 3, 4: the output term (output_cost.hpp) by bytes, by degree; 5: the balanced weighing's own
-// constants.
-constexpr int kCostModelVersion = 5;
+// constants; 6: the half stencil's exchange (OutputCost::exchange).
+constexpr int kCostModelVersion = 6;
 
 std::string machine_key() {
   const MachineInfo& m = machine_info();
@@ -96,10 +96,12 @@ template <>
 struct FieldTable<OutputCost> {
   using T = OutputCost;
   static constexpr auto kFields =
-      std::tuple{field("threads", &T::threads), field("low_degree", &T::low_degree),
+      std::tuple{field("threads", &T::threads),
+                 field("low_degree", &T::low_degree),
                  field("low_seconds_per_entry", &T::low_seconds_per_entry),
                  field("high_degree", &T::high_degree),
-                 field("high_seconds_per_entry", &T::high_seconds_per_entry)};
+                 field("high_seconds_per_entry", &T::high_seconds_per_entry),
+                 field("exchange", &T::exchange).may_be_absent()};
 };
 
 template <>

@@ -48,6 +48,32 @@ TEST(TuneCli, PredictOnlyMakesNoTimedRunAndLabelsPredictions) {
   }
 }
 
+// The calibration stores the half stencil's exchange (output_cost.hpp) at its multi-thread
+// point, from a dynamic deal's assembly against the block's, and none where nothing is passed
+// on: one thread, the full stencil.
+TEST(TuneCli, TheCalibrationHoldsTheHalfStencilsExchange) {
+  const json cache = json::parse(std::ifstream(tune_cache() + "/tuning.json"));
+  bool half_at_two = false;
+  for (const auto& [machine, calibration] : cache["calibrations"].items()) {
+    if (calibration["cost_model_version"] != 6) continue;  // older entries are misses
+    for (const auto& [structure, costs] : calibration["structures"].items()) {
+      for (const json& point : costs["output"]) {
+        ASSERT_TRUE(point.contains("exchange")) << structure << point;
+        const double exchange = point["exchange"].get<double>();
+        EXPECT_GE(exchange, 0.0) << structure << point;
+        const bool half = structure.find("/half") != std::string::npos;
+        if (!half || point["threads"] == 1) {
+          EXPECT_EQ(exchange, 0.0) << structure << point;
+        }
+        half_at_two = half_at_two || (half && point["threads"] == 2);
+      }
+    }
+  }
+  if (omp_get_num_procs() >= 2) {
+    EXPECT_TRUE(half_at_two) << "no half stencil calibrated at 2";
+  }
+}
+
 TEST(TuneCli, ReportsModelSearchExhaustiveWithRegretAndCost) {
   const std::string dir = temp_dir("tune_full");
   const auto r =

@@ -47,5 +47,24 @@ TEST(OutputCost, ThePointOfTheThreadCountAndTheEntriesSplitOverThreads) {
   EXPECT_DOUBLE_EQ(output_seconds(two, {100'000'000, 10'000}, 1), 1e8 * 4e-9);
 }
 
+// The half stencil's reverse entries passed on: 1 + exchange (P - 1) / P with the exchange of the
+// thread count's point; an exchange fitted from a passing deal's assembly against the block's.
+TEST(OutputCost, PassingEntriesOnCostsTheExchangeOfThePassedShare) {
+  std::vector<OutputCost> costs = kCosts;
+  costs[1].exchange = 2.0;
+  EXPECT_DOUBLE_EQ(exchange_factor(costs, 1), 1.0);
+  EXPECT_DOUBLE_EQ(exchange_factor(costs, 2), 2.0);  // half of them, twice a write each
+  EXPECT_DOUBLE_EQ(exchange_factor(costs, 16), 1.0 + 2.0 * 15 / 16);
+  EXPECT_DOUBLE_EQ(exchange_factor(kCosts, 16), 1.0);  // not measured: none
+  EXPECT_DOUBLE_EQ(exchange_factor({}, 16), 1.0);
+  // Two threads: the passing deal's assembly twice the block's = 1 + e / 2, so e = 2.
+  EXPECT_DOUBLE_EQ(fit_exchange(0.2, 0.1, 2), 2.0);
+  // Four: 1.5 = 1 + e 3 / 4, so e = 2 / 3.
+  EXPECT_DOUBLE_EQ(fit_exchange(0.15, 0.1, 4), 2.0 / 3);
+  EXPECT_EQ(fit_exchange(0.09, 0.1, 2), 0.0);  // no slower: nothing
+  EXPECT_EQ(fit_exchange(0.2, 0.1, 1), 0.0);
+  EXPECT_EQ(fit_exchange(0.2, 0.0, 2), 0.0);
+}
+
 }  // namespace
 }  // namespace contactlab::tuner

@@ -5,9 +5,10 @@
 
 namespace contactlab::tuner {
 
-double output_seconds(std::span<const OutputCost> costs, const OutputEstimate& output,
-                      int threads) {
-  if (costs.empty() || output.entries == 0 || threads < 1) return 0.0;
+namespace {
+
+// The point calibrated at the largest thread count not above `threads`, else the smallest.
+const OutputCost& point_for(std::span<const OutputCost> costs, int threads) {
   const OutputCost* chosen = nullptr;
   for (const OutputCost& c : costs) {
     if (c.threads <= threads && (!chosen || c.threads > chosen->threads)) chosen = &c;
@@ -16,7 +17,15 @@ double output_seconds(std::span<const OutputCost> costs, const OutputEstimate& o
     chosen = &*std::min_element(costs.begin(), costs.end(),
                                 [](const auto& a, const auto& b) { return a.threads < b.threads; });
   }
-  const OutputCost& c = *chosen;
+  return *chosen;
+}
+
+}  // namespace
+
+double output_seconds(std::span<const OutputCost> costs, const OutputEstimate& output,
+                      int threads) {
+  if (costs.empty() || output.entries == 0 || threads < 1) return 0.0;
+  const OutputCost& c = point_for(costs, threads);
   double per_entry = c.low_seconds_per_entry;
   if (output.degree >= c.high_degree) {
     per_entry = c.high_seconds_per_entry;
@@ -26,6 +35,18 @@ double output_seconds(std::span<const OutputCost> costs, const OutputEstimate& o
     per_entry += along * (c.high_seconds_per_entry - c.low_seconds_per_entry);
   }
   return static_cast<double>(output.entries) / threads * std::max(per_entry, 0.0);
+}
+
+double exchange_factor(std::span<const OutputCost> costs, int threads) {
+  if (costs.empty() || threads <= 1) return 1.0;
+  const double p = threads;
+  return 1.0 + std::max(point_for(costs, threads).exchange, 0.0) * (p - 1.0) / p;
+}
+
+double fit_exchange(double passing_s, double block_s, int threads) {
+  if (threads <= 1 || !(passing_s > 0.0) || !(block_s > 0.0)) return 0.0;
+  const double p = threads;
+  return std::max(0.0, (passing_s / block_s - 1.0) * p / (p - 1.0));
 }
 
 }  // namespace contactlab::tuner

@@ -21,7 +21,8 @@ WorkView view_of(const LoopWork& work) { return {work.tests, work.homes, work.bu
 // the maximum over the kernel's parts before the choice, so every part chooses alike.
 std::pair<Variant, double> best_schedule(MeasuredKernel& kernel, const Variant& structure,
                                          WorkView work, int threads, const MachineCosts& costs,
-                                         const std::vector<int>& grid, double output_s) {
+                                         const std::vector<int>& grid, double output_s,
+                                         double exchange) {
   const PreparedWork prepared(work);
   const std::array kinds{ScheduleKind::kStatic, ScheduleKind::kDynamic, ScheduleKind::kGuided,
                          ScheduleKind::kBalanced};
@@ -34,8 +35,9 @@ std::pair<Variant, double> best_schedule(MeasuredKernel& kernel, const Variant& 
     if (kind == ScheduleKind::kStatic) candidates.insert(candidates.begin(), 0);  // block
     for (const CandidatePrediction& c :
          predict_best_chunk(prepared, threads, kind, costs, candidates).candidates) {
-      const double share =
-          kernel.copied_output_share(with_schedule(structure, kind, c.chunk), threads);
+      const Variant candidate = with_schedule(structure, kind, c.chunk);
+      const double share = kernel.copied_output_share(candidate, threads) *
+                           (passes_reverse_entries_on(candidate, threads) ? exchange : 1.0);
       seconds.push_back(c.predicted_seconds + output_s * share);
     }
     chunks.push_back(std::move(candidates));
@@ -84,10 +86,12 @@ class ModelMethod final : public TuningMethod {
                         0.0,
                         calibrated ? found->second.output : std::vector<OutputCost>{}};
       const double copy_all_s = output_seconds(s.output, output, state.threads);
+      const double exchange = exchange_factor(s.output, state.threads);
       std::tie(s.model_choice, s.predicted_s) =
           best_schedule(state.kernel, structure, view_of(s.work), state.threads, s.costs,
-                        options.chunk_grid, copy_all_s);
-      s.output_s = copy_all_s * state.kernel.copied_output_share(s.model_choice, state.threads);
+                        options.chunk_grid, copy_all_s, exchange);
+      s.output_s = copy_all_s * state.kernel.copied_output_share(s.model_choice, state.threads) *
+                   (passes_reverse_entries_on(s.model_choice, state.threads) ? exchange : 1.0);
       table.push_back({{"variant", to_string(s.model_choice)},
                        {"predicted_s", s.predicted_s},
                        {"output_s", s.output_s}});
@@ -103,9 +107,9 @@ class ModelMethod final : public TuningMethod {
     // Other thread counts, from the model's structure.
     const PricedStructure& best = *state.model_best;
     for (const int p : options.predict_threads) {
-      const auto [variant, seconds] =
-          best_schedule(state.kernel, best.variant, view_of(best.work), p, best.costs,
-                        options.chunk_grid, output_seconds(best.output, output, p));
+      const auto [variant, seconds] = best_schedule(
+          state.kernel, best.variant, view_of(best.work), p, best.costs, options.chunk_grid,
+          output_seconds(best.output, output, p), exchange_factor(best.output, p));
       state.report.predictions.push_back(
           {p, to_string(variant), seconds,
            p > omp_get_num_procs() ? "predicted (model only: more threads than this machine has)"

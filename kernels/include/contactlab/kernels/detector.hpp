@@ -72,6 +72,12 @@ bool writes_first_rows_in_place(const Variant& variant, int threads);
 // The share of the output entries the assembly copies after the loop: 1 - 1/threads where
 // thread 0 writes in place, else 1 (the tuner prices the output per copied entry).
 double copied_output_share(const Variant& variant, int threads);
+// Whether the half stencil's threads pass their reverse entries on to the threads that own the
+// rows: where a thread's homes are not one run of rows back to back with the others' (chunks, a
+// dynamic or guided deal, unsorted particles; detector_rows.cpp, choose_row_blocks), rows are
+// split by weight and (P - 1) / P of a thread's reverse entries go to other threads. Never with
+// the full stencil (no reverse entries) or one thread.
+bool passes_reverse_entries_on(const Variant& variant, int threads);
 
 // The one meaning of "threads = 0" everywhere (detect, sweep, tune, --variant auto and the
 // tuning cache's keys): OpenMP's default team size, omp_get_max_threads(), which follows

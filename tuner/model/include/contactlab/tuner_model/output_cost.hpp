@@ -31,6 +31,12 @@ struct OutputCost {
   int threads = 1;
   double low_degree = 0.0, low_seconds_per_entry = 0.0;
   double high_degree = 0.0, high_seconds_per_entry = 0.0;
+  // What passing a reverse entry on to another thread's row costs, in entries written: where
+  // the half stencil's threads pass them on (passes_reverse_entries_on), (P - 1) / P of the
+  // entries are passed, and the output takes 1 + exchange (P - 1) / P times as long. Measured
+  // at `threads` from a dynamic deal's assembly against the block's; 0 where not measured (the
+  // full stencil, one thread, caches from before it).
+  double exchange = 0.0;
   friend bool operator==(const OutputCost&, const OutputCost&) = default;
 };
 
@@ -47,5 +53,17 @@ struct OutputEstimate {
 // smallest), and assumes the entries split evenly over the threads (a prediction past the
 // calibrated count assumes the writes scale with the threads). Empty costs or no entries: 0.
 double output_seconds(std::span<const OutputCost> costs, const OutputEstimate& output, int threads);
+
+// 1 + exchange (P - 1) / P at P = `threads`, with the exchange of the point output_seconds uses:
+// the factor on the output where the half stencil's threads pass their reverse entries on (the
+// 16-core Xeon's static,200 assembly, whose threads do, ran 0.25 of its one-thread time at 16
+// threads where the block's rows, its homes, took 0.39 and an even split would take 0.06).
+// 1 for empty costs.
+double exchange_factor(std::span<const OutputCost> costs, int threads);
+
+// The exchange from the assembly's seconds at `threads` > 1 under a deal that passes the
+// entries on and under the block: the passed share (threads - 1) / threads made the difference.
+// 0 where the times are not positive or the passing deal was no slower.
+double fit_exchange(double passing_s, double block_s, int threads);
 
 }  // namespace contactlab::tuner
