@@ -1,5 +1,6 @@
 // `contactlab probe`: the memory bandwidth this machine's threads draw at each working-set size
-// (STREAM's triad), printed and written as the machine file the emulations read
+// (STREAM's triad) and the arithmetic they do from registers, printed and written as the
+// machine file the emulations read
 // (tuner/bandwidth_probe.hpp; docs/emulation.md, "Bandwidth").
 #include <fmt/core.h>
 #include <omp.h>
@@ -70,6 +71,12 @@ struct ProbeCommand {
                    threads, bytes_per_s / 1e9);
       }
     }
+    // Whether P threads compute P times as fast: the arithmetic's rate over P x one thread's.
+    const double one = probe.operations_per_s.front().second / probe.operations_per_s.front().first;
+    fmt::print("\n{:>8} {:>14} {:>16}\n", "threads", "Gop/s", "of P x 1 thread");
+    for (const auto& [threads, rate] : probe.operations_per_s) {
+      fmt::print("{:>8} {:>14.2f} {:>16.2f}\n", threads, rate / 1e9, rate / (threads * one));
+    }
     if (!json_out_.empty()) {
       const nlohmann::json doc = tn::probe_document(
           probe, options, tn::collect_context(command_line_, options.threads.back()));
@@ -86,7 +93,8 @@ Subcommand add_probe_command(CLI::App& app, const std::string& command_line) {
   command->command_line_ = command_line;
   CLI::App* sub = app.add_subcommand(
       "probe",
-      "the memory bandwidth this machine's threads draw (STREAM's triad), per working set");
+      "the memory bandwidth this machine's threads draw (STREAM's triad), per working set, and "
+      "the arithmetic they do from registers");
   sub->add_option("--threads", command->threads_,
                   "thread counts, ascending (default: 1 .. the machine's cores)");
   sub->add_option("--sizes", command->sizes_,

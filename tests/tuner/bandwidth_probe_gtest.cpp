@@ -66,6 +66,19 @@ TEST(BandwidthProbe, EveryPointMeasuredAndTheFileReadsBack) {
   EXPECT_EQ(back.working_sets[1].bytes_per_s, probe.working_sets[1].bytes_per_s);
   EXPECT_DOUBLE_EQ(curve_of(back.working_sets[0], 0.0).at(2),
                    probe.working_sets[0].bytes_per_s[1].second);
+  // The arithmetic at every thread count, read back as written.
+  ASSERT_EQ(probe.operations_per_s.size(), 2u);
+  EXPECT_EQ(probe.operations_per_s[0].first, 1);
+  EXPECT_EQ(probe.operations_per_s[1].first, 2);
+  for (const auto& point : probe.operations_per_s) EXPECT_GT(point.second, 1e6);
+  EXPECT_EQ(back.operations_per_s, probe.operations_per_s);
+  // A machine file from before the arithmetic probe reads, with none.
+  nlohmann::json older = doc;
+  older.erase("arithmetic");
+  std::ofstream(path, std::ios::trunc) << older.dump(1);
+  EXPECT_TRUE(read_machine_file(path).operations_per_s.empty());
+  EXPECT_THROW(probe_arithmetic(0, 1), InputError);
+  EXPECT_THROW(probe_arithmetic(1, 0), InputError);
 }
 
 // A machine file with `edit` applied to a valid one: the error names the file and the path.
@@ -73,6 +86,7 @@ std::string error_of(const std::function<void(nlohmann::json&)>& edit) {
   ProbeOptions options = small_options();
   MachineProbe probe;
   probe.working_sets = {{96u << 10, {{1, 2e9}, {2, 3e9}}}, {1u << 20, {{1, 1e9}, {2, 1.5e9}}}};
+  probe.operations_per_s = {{1, 4e10}, {2, 8e10}};
   nlohmann::json doc = probe_document(probe, options, collect_context("test", 2));
   edit(doc);
   const std::string path = test::temp_dir("probe_bad") + "/machine.json";
@@ -102,6 +116,16 @@ TEST(BandwidthProbe, ABadMachineFileIsOneErrorNamingWhere) {
               d["working_sets"][0].erase("points");
             }).find("missing field 'points'"),
             std::string::npos);
+  EXPECT_NE(error_of([](nlohmann::json& d) {
+              d["arithmetic"][1]["threads"] = 1;
+            }).find("$.arithmetic[1]: thread counts must be ascending"),
+            std::string::npos);
+  EXPECT_NE(error_of([](nlohmann::json& d) {
+              d["arithmetic"][0]["operations_per_s"] = 0;
+            }).find("$.arithmetic[0]: threads must be >= 1"),
+            std::string::npos);
+  EXPECT_NE(error_of([](nlohmann::json& d) { d["arithmetic"] = 3; }).find("$.arithmetic"),
+            std::string::npos);
   EXPECT_THROW(read_machine_file("/nonexistent/machine.json"), InputError);
 }
 
@@ -111,6 +135,7 @@ TEST(ProbeCli, PrintsTheTableAndWritesTheMachineFile) {
                              "--repetitions 2 --json " + dir + "/out/machine.json");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("GB/s"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("of P x 1 thread"), std::string::npos) << r.output;
   const MachineProbe back = read_machine_file(dir + "/out/machine.json");
   EXPECT_EQ(back.working_sets.size(), 2u);
 }

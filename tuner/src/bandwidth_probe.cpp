@@ -7,6 +7,7 @@
 #include <chrono>
 #include <fstream>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 
 #include "contactlab/kernels/error.hpp"
@@ -45,7 +46,56 @@ double best_triad_bytes_per_s(double* a, const double* b, const double* c, std::
   return best;
 }
 
+// Independent chains of x = x * m + a (a multiply and an add each: built without contraction)
+// over lanes the compiler vectorises: the core's floating-point throughput, no memory touched.
+// kChains x kLanes values stay in registers; the result is returned so nothing is dropped.
+double arithmetic_chains(std::uint64_t steps) {
+  constexpr int kChains = 8, kLanes = 8;
+  double x[kChains][kLanes];
+  for (int c = 0; c < kChains; ++c) {
+    for (int l = 0; l < kLanes; ++l) x[c][l] = 1.0 + 1e-3 * (c * kLanes + l);
+  }
+  const double m = 0.999999, a = 1e-7;
+  for (std::uint64_t s = 0; s < steps; ++s) {
+    for (int c = 0; c < kChains; ++c) {
+#pragma omp simd
+      for (int l = 0; l < kLanes; ++l) x[c][l] = x[c][l] * m + a;
+    }
+  }
+  double sum = 0.0;
+  for (int c = 0; c < kChains; ++c) {
+    for (int l = 0; l < kLanes; ++l) sum += x[c][l];
+  }
+  return sum;
+}
+
 }  // namespace
+
+double probe_arithmetic(int threads, int repetitions) {
+  if (threads < 1) throw InputError("probe: a thread count below 1");
+  if (repetitions < 1) throw InputError("probe: --repetitions must be >= 1");
+  constexpr std::uint64_t kSteps = 4'000'000;           // about 20 ms a thread at 3 GHz
+  constexpr double kOperations = 2.0 * 8 * 8 * kSteps;  // per thread per run
+  double sink = 0.0;
+  auto run = [&] {
+    double sum = 0.0;
+    const auto start = std::chrono::steady_clock::now();
+#pragma omp parallel num_threads(threads) reduction(+ : sum)
+    sum += arithmetic_chains(kSteps);
+    const double seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    sink += sum;
+    return seconds;
+  };
+  run();  // untimed: the threads woken, the clock raised
+  double best = 0.0;
+  for (int r = 0; r < repetitions; ++r) {
+    const double seconds = run();
+    if (seconds > 0.0) best = std::max(best, kOperations * threads / seconds);
+  }
+  if (!(sink > 0.0)) throw std::logic_error("probe: the arithmetic gave no result");
+  return best;
+}
 
 void validate(const ProbeOptions& options) {
   if (options.threads.empty()) throw InputError("probe: no thread count");
@@ -91,6 +141,9 @@ MachineProbe probe_bandwidth(const ProbeOptions& options) {
     }
     probe.working_sets.push_back(std::move(set));
   }
+  for (const int t : options.threads) {
+    probe.operations_per_s.emplace_back(t, probe_arithmetic(t, options.repetitions));
+  }
   return probe;
 }
 
@@ -106,8 +159,10 @@ nlohmann::json probe_document(const MachineProbe& probe, const ProbeOptions& opt
       "the arrays first touched by {} threads with that schedule; per working set (the three "
       "arrays together) and thread count one untimed pass, then the best of {} timed passes; "
       "bytes counted as STREAM counts them (24 per element: two reads and a write, not the "
-      "write-allocate).",
-      options.threads.back(), options.repetitions);
+      "write-allocate). Arithmetic: every thread the same 64 independent chains x = x m + a in "
+      "registers (no memory), one untimed run, then the best of {} timed ones; operations (a "
+      "multiply or an add) a second over all threads.",
+      options.threads.back(), options.repetitions, options.repetitions);
   nlohmann::json sets = nlohmann::json::array();
   for (const ProbedWorkingSet& s : probe.working_sets) {
     nlohmann::json points = nlohmann::json::array();
@@ -117,6 +172,11 @@ nlohmann::json probe_document(const MachineProbe& probe, const ProbeOptions& opt
     sets.push_back({{"bytes", s.bytes}, {"points", points}});
   }
   doc["working_sets"] = sets;
+  nlohmann::json arithmetic = nlohmann::json::array();
+  for (const auto& [threads, rate] : probe.operations_per_s) {
+    arithmetic.push_back({{"threads", threads}, {"operations_per_s", rate}});
+  }
+  doc["arithmetic"] = arithmetic;
   return doc;
 }
 
@@ -174,6 +234,26 @@ MachineProbe read_machine_file(const std::string& path) {
         set.field("bytes").fail("working sets must be ascending by bytes");
       }
       probe.working_sets.push_back(std::move(s));
+    }
+    // Machine files from before the arithmetic probe have none.
+    if (const std::optional<JsonIn> arithmetic = top.optional_field("arithmetic")) {
+      if (!arithmetic->value().is_array()) arithmetic->fail("expected an array");
+      for (std::size_t j = 0; j < arithmetic->value().size(); ++j) {
+        ObjectIn point(
+            JsonIn(arithmetic->value()[j], arithmetic->path() + "[" + std::to_string(j) + "]"));
+        int threads = 0;
+        double rate = 0.0;
+        point("threads", threads);
+        point("operations_per_s", rate);
+        point.finish();
+        if (threads < 1 || !(rate > 0.0)) {
+          point.in().fail("threads must be >= 1 and operations_per_s > 0");
+        }
+        if (!probe.operations_per_s.empty() && threads <= probe.operations_per_s.back().first) {
+          point.in().fail("thread counts must be ascending and distinct");
+        }
+        probe.operations_per_s.emplace_back(threads, rate);
+      }
     }
     top.finish();
     return probe;

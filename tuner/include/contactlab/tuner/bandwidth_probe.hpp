@@ -1,6 +1,10 @@
 // `contactlab probe`: the memory bandwidth this machine's threads draw, STREAM's triad
-// (a[i] = b[i] + s c[i]) at each thread count and working-set size, written to a machine file
-// that the emulations read (tuner_model/bandwidth.hpp; docs/emulation.md, "Bandwidth").
+// (a[i] = b[i] + s c[i]) at each thread count and working-set size, and the arithmetic they
+// do from registers alone, written to a machine file that the emulations read
+// (tuner_model/bandwidth.hpp; docs/emulation.md, "Bandwidth"). The arithmetic says whether P
+// threads compute P times as fast: where two of a VM's vCPUs are one core's hyperthreads, or
+// the host shares its cores, they do not, and a loop's speed-up stops short of P for that
+// reason and not its bytes.
 #pragma once
 
 #include <cstdint>
@@ -29,7 +33,16 @@ struct ProbedWorkingSet {
 
 struct MachineProbe {
   std::vector<ProbedWorkingSet> working_sets;  // ascending by bytes
+  // (threads, best arithmetic rate, operations a second over all threads): every thread the
+  // same independent multiply-add chains in registers. Empty in machine files from before it.
+  std::vector<std::pair<int, double>> operations_per_s;
 };
+
+// The arithmetic rate of `threads` threads, each running the same register-resident chains (tens
+// of milliseconds; the best of `repetitions` timed runs after one untimed): operations (a
+// multiply or an add) a second over all threads. Throws InputError for threads or repetitions
+// below 1.
+double probe_arithmetic(int threads, int repetitions);
 
 // Throws InputError, naming the problem, for no thread counts, one below 1, counts not ascending
 // and distinct, no working set, one below 3 KiB or not ascending, or repetitions < 1.
