@@ -31,6 +31,9 @@ grep -q "| a structure's best | \`particle/sorted/half/dynamic,256\` | \*0.0090\
 /usr/bin/python3 analysis/device_summary.py tests/analysis/fixture/parts-2c --out "$out/parts.md" > /dev/null
 grep -q "^T_s's parts" "$out/parts.md"
 grep -q '| `particle/sorted/half/static` | reorder | 0\.[0-9]* (1\.00) | 0\.[0-9]* ([0-9.]*) |' "$out/parts.md"
+# ... and a folder's machine file its triad and arithmetic table.
+grep -q '^| arithmetic, of P x 1 thread | 1.00 | [0-9.]* |$' "$out/parts.md"
+grep -q '^| triad, 64 MiB \[GB/s\] | [0-9.]* | [0-9.]* |$' "$out/parts.md"
 if grep -q "^T_s's parts" "$out/summary.md"; then
   echo "a parts table from files without parts" >&2
   exit 1
