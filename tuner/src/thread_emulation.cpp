@@ -244,16 +244,16 @@ ThreadEmulation emulate_threads(const Scene& scene, double diameter,
       return std::max(
           median(samples[i][j].assembly) - output_s(measured_threads[j], variant.schedule), 1e-9);
     };
-    const bool exchanged = passes_reverse_entries_on(variant, 2);
     const int widest = measured_threads[most];
+    const bool exchanged = widest > 1 && passes_reverse_entries_on(variant, widest);
     const AmdahlPhase amdahl = widest > 1
                                    ? AmdahlPhase::fit(assembly_rest(0), widest, assembly_rest(most))
                                    : AmdahlPhase::serial(assembly_rest(0));
     const ExchangePhase exchange =
-        exchanged && widest > 1 ? ExchangePhase::fit(assembly_rest(0), widest, assembly_rest(most))
-                                : ExchangePhase{};
+        exchanged ? ExchangePhase::fit(assembly_rest(0), widest, assembly_rest(most))
+                  : ExchangePhase{};
     auto assembly_s = [&](int threads) {
-      return exchanged && widest > 1 ? exchange.at(threads) : amdahl.at(threads);
+      return exchanged ? exchange.at(threads) : amdahl.at(threads);
     };
     // The loop alone is anchored: the measured one-thread T_c less its assembly.
     const double loop_one =
