@@ -384,9 +384,12 @@ template <class P>
     // that -Wmaybe-uninitialized reports.
     return _mm512_mask_sqrt_pd(v, static_cast<__mmask8>(0xFF), v);
   } else if constexpr (sizeof(P) == 32) {
-    return _mm256_sqrt_pd(v);
+    // GCC's builtins, not the intrinsics: an intrinsic is an always_inline function of the
+    // translation unit's own target, which a region of fewer instructions may not inline (the
+    // baseline set's "no-avx" under -march=x86-64-v3 did not compile).
+    return __builtin_ia32_sqrtpd256(v);
   } else {
-    return _mm_sqrt_pd(v);  // SSE2: the x86-64 baseline
+    return __builtin_ia32_sqrtpd(v);  // SSE2: the x86-64 baseline
   }
 #else
   double in[sizeof(P) / sizeof(double)], out[sizeof(P) / sizeof(double)];
