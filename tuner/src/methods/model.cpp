@@ -14,6 +14,13 @@ namespace {
 
 WorkView view_of(const LoopWork& work) { return {work.tests, work.homes, work.builds}; }
 
+// The share of the whole output's copy time a variant pays at `threads`: the entries it copies,
+// times `exchange` where its half stencil's threads pass their reverse entries on.
+double output_share(MeasuredKernel& kernel, const Variant& variant, int threads, double exchange) {
+  return kernel.copied_output_share(variant, threads) *
+         (passes_reverse_entries_on(variant, threads) ? exchange : 1.0);
+}
+
 // The model's best schedule for one structure: every kind, every chunk of the grid, each with
 // the loop's time and its share of `output_s` (the time to copy the whole output after the
 // loop; a schedule may let the kernel write part of it in place). A kernel run by several
@@ -35,10 +42,9 @@ std::pair<Variant, double> best_schedule(MeasuredKernel& kernel, const Variant& 
     if (kind == ScheduleKind::kStatic) candidates.insert(candidates.begin(), 0);  // block
     for (const CandidatePrediction& c :
          predict_best_chunk(prepared, threads, kind, costs, candidates).candidates) {
-      const Variant candidate = with_schedule(structure, kind, c.chunk);
-      const double share = kernel.copied_output_share(candidate, threads) *
-                           (passes_reverse_entries_on(candidate, threads) ? exchange : 1.0);
-      seconds.push_back(c.predicted_seconds + output_s * share);
+      seconds.push_back(c.predicted_seconds +
+                        output_s * output_share(kernel, with_schedule(structure, kind, c.chunk),
+                                                threads, exchange));
     }
     chunks.push_back(std::move(candidates));
   }
@@ -90,8 +96,7 @@ class ModelMethod final : public TuningMethod {
       std::tie(s.model_choice, s.predicted_s) =
           best_schedule(state.kernel, structure, view_of(s.work), state.threads, s.costs,
                         options.chunk_grid, copy_all_s, exchange);
-      s.output_s = copy_all_s * state.kernel.copied_output_share(s.model_choice, state.threads) *
-                   (passes_reverse_entries_on(s.model_choice, state.threads) ? exchange : 1.0);
+      s.output_s = copy_all_s * output_share(state.kernel, s.model_choice, state.threads, exchange);
       table.push_back({{"variant", to_string(s.model_choice)},
                        {"predicted_s", s.predicted_s},
                        {"output_s", s.output_s}});
