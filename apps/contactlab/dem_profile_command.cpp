@@ -191,7 +191,7 @@ int DemProfileCommand::run() const {
     {
       const std::unique_ptr<dem::Engine> at_start = make_engine(variant, 1);
       at_start->step();
-      work = dem::force_loop_work(at_start->pairs(), at_start->particles().size());
+      work = dem::force_loop_work(at_start->force_pairs(), at_start->particles().size());
     }
     std::set<int> counts(emulate_.begin(), emulate_.end());
     for (const Rounds& m : measured) counts.insert(m.threads);

@@ -84,7 +84,7 @@ int tune_dem(const DemTuneRequest& request) {
   {
     const std::unique_ptr<dem::Engine> at_start = make_engine(dem::ForceVariant{}, threads);
     at_start->step();
-    work = dem::force_loop_work(at_start->pairs(), at_start->particles().size());
+    work = dem::force_loop_work(at_start->force_pairs(), at_start->particles().size());
   }
   const std::vector<dem::RankedVariant> ranked =
       dem::rank_force_variants(work, candidates, threads, costs);

@@ -141,7 +141,7 @@ TEST(DemParticleUpdate, FinishToTheSumsGivesWhatTheArraysGet) {
 struct Drifted {
   Particles p;
   std::vector<double> kin;
-  double max_disp_sq = 0.0;
+  double max_disp_sq = 0.0, max_step_sq = 0.0;
   std::uint32_t bad = UINT32_MAX;
 };
 
@@ -150,11 +150,12 @@ Drifted drift(const Particles& start, const DriftTerms& terms, bool one_by_one) 
   Drifted d{start, std::vector<double>(kKinStride * start.x.size(), -1.0)};
   const std::size_t n = start.x.size();
   if (!one_by_one) {
-    drift_particles(d.p, d.kin.data(), terms, ForceColumns::of(d.p), 0, n, d.max_disp_sq, d.bad);
+    drift_particles(d.p, d.kin.data(), terms, ForceColumns::of(d.p), 0, n, d.max_disp_sq,
+                    d.max_step_sq, d.bad);
   } else {
     for (std::size_t a = 0; a < n; ++a)
       drift_particles(d.p, d.kin.data(), terms, ForceColumns::of(d.p), a, a + 1, d.max_disp_sq,
-                      d.bad);
+                      d.max_step_sq, d.bad);
   }
   return d;
 }
@@ -171,6 +172,8 @@ TEST(DemParticleUpdate, DriftEightAtATimeMatchesOneByOne) {
   }
   EXPECT_EQ(whole.max_disp_sq, single.max_disp_sq);
   EXPECT_GT(whole.max_disp_sq, 0.0);
+  EXPECT_EQ(whole.max_step_sq, single.max_step_sq);
+  EXPECT_GT(whole.max_step_sq, 0.0);
   EXPECT_EQ(whole.bad, UINT32_MAX);
   EXPECT_EQ(whole.kin[kKinStride * 17 + 3], start.radius[17]);
   EXPECT_EQ(whole.kin[kKinStride * 17 + 11], 0.0);

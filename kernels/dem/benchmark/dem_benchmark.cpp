@@ -6,6 +6,7 @@
 // CONTACTLAB_DEM_BENCH_N spheres (default 4096) settled here at t_c/10 (for the smoke test).
 #include <benchmark/benchmark.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <memory>
 #include <string>
@@ -95,6 +96,7 @@ void run_steps(benchmark::State& state, bool fused) {
   std::unique_ptr<Engine> engine = fresh_engine(threads, fused);
   engine->run_steps(20);  // warm-up: first touches, one rebuild if due
   const PhaseTimes before = engine->phase_times();
+  const std::uint64_t near_builds_before = engine->near_builds();
   // Batches of steps, as a run goes between outputs (each finish drifts the next step).
   constexpr std::uint64_t kBatch = 10;
   std::uint64_t steps = 0;
@@ -117,6 +119,11 @@ void run_steps(benchmark::State& state, bool fused) {
   state.counters["contacts_per_particle"] = static_cast<double>(touching) / n;
   state.counters["pairs_per_particle"] = static_cast<double>(engine->pairs().size()) / n;
   state.counters["max_span"] = static_cast<double>(engine->pairs().max_span);
+  // The near pairs the force pass ran on (near_pairs.hpp), and how often they were chosen.
+  state.counters["near_pairs_per_particle"] = static_cast<double>(engine->force_pairs().size()) / n;
+  state.counters["steps_per_near_build"] =
+      static_cast<double>(steps) /
+      static_cast<double>(std::max<std::uint64_t>(1, engine->near_builds() - near_builds_before));
   // The instruction set the step ran on (CONTACTLAB_SIMD chooses another, as for detection).
   state.SetLabel("step on " + to_string(engine->instruction_set()));
 }

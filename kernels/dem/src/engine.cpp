@@ -26,11 +26,13 @@ void Engine::compute_forces_on<StepIsa::kAvx2>(bool final_kick, bool drift_next)
 template <>
 void Engine::compute_forces_on<StepIsa::kAvx512>(bool final_kick, bool drift_next);
 template <>
-void Engine::drift_on<StepIsa::kBaseline>(double& max_disp_sq, std::uint32_t& bad);
+void Engine::drift_on<StepIsa::kBaseline>(double& max_disp_sq, double& max_step_sq,
+                                          std::uint32_t& bad);
 template <>
-void Engine::drift_on<StepIsa::kAvx2>(double& max_disp_sq, std::uint32_t& bad);
+void Engine::drift_on<StepIsa::kAvx2>(double& max_disp_sq, double& max_step_sq, std::uint32_t& bad);
 template <>
-void Engine::drift_on<StepIsa::kAvx512>(double& max_disp_sq, std::uint32_t& bad);
+void Engine::drift_on<StepIsa::kAvx512>(double& max_disp_sq, double& max_step_sq,
+                                        std::uint32_t& bad);
 
 Engine::Engine(EngineSettings settings, Particles particles, Halo* halo, const State* resume)
     : settings_(std::move(settings)),
@@ -154,6 +156,41 @@ void Engine::refresh_kinematics(double kick) {
   }
   index_wall_reach();
   index_pair_constants();
+  choose_near_pairs(true);
+}
+
+void Engine::store_pair_springs() const {
+  if (!pair_springs_stale_) return;
+  near_.write_back(pairs_, settings_.threads);
+  pair_springs_stale_ = false;
+}
+
+void Engine::choose_near_pairs(bool list_rebuilt) {
+  // A ghost's moves are its owner's: the local drift's largest move does not bound them.
+  if (halo_ != nullptr || !(settings_.near_margin > 0.0)) return;
+  // The margin follows how fast the particles close gaps, counted in steps (so every thread
+  // count chooses the same): a choice costs about a third of a step's pairs, and pays where it
+  // lasts some tens of steps (the settled bed: 20 - 40 steps at 0.05 - 0.1 of the skin, 1.24x
+  // the whole list's step; a smaller margin took fewer pairs but chose them too often). Chosen
+  // every few steps (a flowing hopper), the margin doubles, and at the skin the whole list runs
+  // until the next rebuild, which tries again.
+  constexpr std::uint64_t kFewSteps = 16, kManySteps = 64;
+  if (near_.builds == 0) near_fraction_ = settings_.near_margin;
+  if (!list_rebuilt) {
+    const std::uint64_t lasted = step_ - near_built_at_;
+    if (lasted < kFewSteps) near_fraction_ *= 2.0;
+    if (lasted > kManySteps) near_fraction_ = std::max(near_fraction_ / 2.0, kMinNearFraction);
+  }
+  if (near_fraction_ >= 1.0) {  // as many pairs as the list: the list itself
+    store_pair_springs();
+    near_on_ = false;
+    near_fraction_ = 0.5;  // what the next rebuild tries
+    return;
+  }
+  near_on_ = true;
+  near_built_at_ = step_;
+  near_.build(pairs_, list_rebuilt, kin_.data(), kKinStride, particles_.size(),
+              near_fraction_ * settings_.skin, settings_.threads);
 }
 
 void Engine::index_pair_constants() {
@@ -241,7 +278,8 @@ void Engine::store_forces() {
 }
 
 void Engine::rebuild() {
-  store_forces();  // the sink, the migrants, the reorder and the velocities below read them
+  store_forces();        // the sink, the migrants, the reorder and the velocities below read them
+  store_pair_springs();  // what the new list carries
   // With a halo: the ghosts leave before the sink (it counts owned particles only), and the
   // migrants and new ghosts arrive after it, their springs carried along.
   if (halo_ != nullptr) halo_->drop_ghosts(particles_, pairs_, carried_);
@@ -328,19 +366,20 @@ bool Engine::advance(bool drift_next, bool end_at_rebuild) {
   const double dt = settings_.dt_s;
   const double move_limit_sq = 0.25 * settings_.skin * settings_.skin;  // (skin/2)^2
   double t0 = omp_get_wtime();
-  double max_disp_sq = 0.0;
+  double max_disp_sq = 0.0, max_step_sq = 0.0;
   std::uint32_t bad = UINT32_MAX;  // the first particle that moved too far or is not finite
   particle_steps_ += halo_ != nullptr ? halo_->owned_count() : n;
   if (drifted_) {  // the last finish drifted this step already
     drifted_ = false;
     max_disp_sq = drifted_disp_sq_;
+    max_step_sq = drifted_step_sq_;
     bad = drifted_bad_;
   } else {
     store_forces();
     static constexpr std::array kDrifts{&Engine::drift_on<StepIsa::kBaseline>,
                                         &Engine::drift_on<StepIsa::kAvx2>,
                                         &Engine::drift_on<StepIsa::kAvx512>};
-    (this->*kDrifts[static_cast<std::size_t>(step_isa_)])(max_disp_sq, bad);
+    (this->*kDrifts[static_cast<std::size_t>(step_isa_)])(max_disp_sq, max_step_sq, bad);
   }
   // Time from the last (re)start's base: exact multiples of dt, also after a dt change.
   time_s_ = base_time_s_ + static_cast<double>(step_ + 1 - base_step_) * dt;
@@ -361,6 +400,12 @@ bool Engine::advance(bool drift_next, bool end_at_rebuild) {
   if (rebuilds) {
     rebuild();
     phases_.neighbor_s += omp_get_wtime() - t1;
+  } else if (near_on_) {
+    near_.moved += std::sqrt(max_step_sq);
+    if (near_.stale()) {
+      choose_near_pairs(false);
+      phases_.neighbor_s += omp_get_wtime() - t1;
+    }
   }
   // The finish can drift only once every pair has read the kinematics blocks: after the pass
   // (update=separate), not among the pairs.
@@ -371,8 +416,9 @@ bool Engine::advance(bool drift_next, bool end_at_rebuild) {
 
 void Engine::check_pair_overlap(std::size_t k) const {
   const Particles& p = particles_;
-  const std::uint32_t i = pairs_.i[k], j = pairs_.j[k];
-  const auto& sh = pairs_.shift[pairs_.image[k]];
+  const PairList& q = force_pairs();
+  const std::uint32_t i = q.i[k], j = q.j[k];
+  const auto& sh = q.shift[q.image[k]];
   const double overlap =
       p.radius[i] + p.radius[j] -
       std::hypot(p.x[i] - p.x[j] - sh[0], p.y[i] - p.y[j] - sh[1], p.z[i] - p.z[j] - sh[2]);

@@ -47,7 +47,7 @@ Energies Engine::local_energies() const {
       elastic += 0.5 * kn * delta * delta + 0.5 * c.kt_ratio * kn * h2;
     }
   }
-  const PairList& q = pairs_;
+  const PairList& q = force_pairs();  // every touching pair
   for (std::size_t k = 0; k < q.size(); ++k) {
     const std::uint32_t i = q.i[k], j = q.j[k];
     const auto& sh = q.shift[q.image[k]];
@@ -92,6 +92,7 @@ void Engine::restore(const State& state, Particles particles, PairList pairs) {
   set_counters(state);
   particles_ = std::move(particles);
   const auto shift = pairs_.shift;
+  pair_springs_stale_ = false;  // the saved springs are the ones
   pairs_ = std::move(pairs);
   pairs_.shift = shift;
   pairs_.resize(pairs_.i.size());

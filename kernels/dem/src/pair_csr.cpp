@@ -104,17 +104,30 @@ void PairList::build_csr(std::size_t particles, int threads, RadixBuffers& buffe
     gather(hy, buffers.real_scratch, order, threads);
     gather(hz, buffers.real_scratch, order, threads);
   }
+  index_rows(particles, threads);
+  index_j_sides(particles, threads, buffers);
+}
+
+void PairList::index_rows(std::size_t particles, int threads) {
+  const std::size_t count = size();
   rows.resize(particles + 1);
   offsets_of_sorted(i.data(), count, particles, rows.data(), threads);
   std::size_t span = 0;
 #pragma omp parallel for schedule(static) num_threads(threads) reduction(max : span)
   for (std::size_t k = 0; k < count; ++k) span = std::max<std::size_t>(span, i[k] - j[k]);
   max_span = span;
+  j_sides_indexed = false;
+}
+
+void PairList::index_j_sides(std::size_t particles, int threads, RadixBuffers& buffers) {
+  const std::size_t count = size();
+  const int index_bits = std::max(1, static_cast<int>(std::bit_width(particles)));
   // The pairs where each particle is the j, in pair order.
   stable_order(j, index_bits, threads, buffers);
   j_pairs.swap(buffers.payload);
   j_offsets.resize(particles + 1);
   offsets_of_sorted(buffers.keys.data(), count, particles, j_offsets.data(), threads);
+  j_sides_indexed = true;
 }
 
 void radix_sort(std::vector<std::uint64_t>& keys, std::vector<std::uint32_t>& payload, int bits,

@@ -194,17 +194,18 @@ struct DriftTerms {
 
 // Drifts particles [first, last): v += a dt/2, x += v dt, their kinematics blocks rewritten
 // (position, radius, the velocities the forces see, mass); max_disp_sq rises to the largest
-// squared displacement since the last list build, bad falls to the first particle that moved
-// more than the limit or whose position is not finite.
+// squared displacement since the last list build, max_step_sq to the largest squared move of
+// this step, bad falls to the first particle that moved more than the limit or whose position
+// is not finite.
 // Force and torque come from `forces` (the arrays, or the finish's piece buffer).
 inline void drift_particles(Particles& p, double* kin, const DriftTerms& t,
                             const ForceColumns& forces, std::size_t first, std::size_t last,
-                            double& max_disp_sq, std::uint32_t& bad) {
+                            double& max_disp_sq, double& max_step_sq, std::uint32_t& bad) {
   const ParticleArrays arrays(p);
   const ForceColumns& f = forces;
   const double dt = t.dt, half = t.half_dt, kick = t.kick, limit = t.move_limit_sq;
   std::size_t a = first;
-  Lanes disp_max{};
+  Lanes disp_max{}, step_max{};
   for (; a + kLanes <= last; a += kLanes) {
     const Lanes im = load_lanes(arrays.inv_mass + a), ii = load_lanes(arrays.inv_inertia + a);
     const std::size_t c = a - f.first;
@@ -248,6 +249,7 @@ inline void drift_particles(Particles& p, double* kin, const DriftTerms& t,
     const Lanes disp = ddx * ddx + ddy * ddy + ddz * ddz;
     disp_max = select(disp_max < disp, disp, disp_max);
     const Lanes step_sq = mx * mx + my * my + mz * mz, sum = xa + ya + za;
+    step_max = select(step_max < step_sq, step_sq, step_max);
     // x - x is 0 exactly when x is finite (inf - inf and NaN - NaN are NaN).
     // NOLINTNEXTLINE(misc-redundant-expression): that finiteness test, on purpose
     if (any_false((step_sq <= limit) & (sum - sum == 0.0))) [[unlikely]] {
@@ -259,7 +261,10 @@ inline void drift_particles(Particles& p, double* kin, const DriftTerms& t,
       }
     }
   }
-  for (std::size_t l = 0; l < kLanes; ++l) max_disp_sq = std::max(max_disp_sq, disp_max[l]);
+  for (std::size_t l = 0; l < kLanes; ++l) {
+    max_disp_sq = std::max(max_disp_sq, disp_max[l]);
+    max_step_sq = std::max(max_step_sq, step_max[l]);
+  }
   for (; a < last; ++a) {
     const std::size_t c = a - f.first;
     const double ax = f.fx[c] * arrays.inv_mass[a], ay = f.fy[c] * arrays.inv_mass[a],
@@ -293,6 +298,7 @@ inline void drift_particles(Particles& p, double* kin, const DriftTerms& t,
                  ddz = arrays.z[a] - arrays.z0[a];
     max_disp_sq = std::max(max_disp_sq, ddx * ddx + ddy * ddy + ddz * ddz);
     const double step_sq = mx * mx + my * my + mz * mz;
+    max_step_sq = std::max(max_step_sq, step_sq);
     if (!(step_sq <= limit) || !std::isfinite(arrays.x[a] + arrays.y[a] + arrays.z[a])) {
       bad = std::min(bad, static_cast<std::uint32_t>(a));
     }

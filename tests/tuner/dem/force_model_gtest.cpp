@@ -140,7 +140,7 @@ TEST(DemForceModel, RetunerSwitchesOnlyPastItsMargin) {
   c.per_pair[0] = 1.0;
   c.per_pair[1] = 1.0;
   c.per_pair[2] = 1.0;
-  c.per_pair[3] = 0.25;  // the full list's two sides cost half an ordered pair
+  c.per_pair[3] = 0.1;  // the full list's two sides cost a fifth of an ordered pair
   c.per_particle_update = 1.0;
   const std::vector<ForceVariant> candidates{ForceVariant{},
                                              parse_force_variant("full-list/static")};

@@ -90,11 +90,14 @@ ForceLoopWork force_loop_work(const PairList& pairs, std::size_t particles) {
   work.reach_offsets.push_back(0);
   const std::size_t span_blocks = pairs.max_span / kRowsPerBlock + 2;
   std::vector<std::uint32_t> reach(span_blocks + 1, 0);  // by b - (j's block)
+  // The j sides by the block of their j, counted from the pairs (the list's j-side index is
+  // built only for the full list's pass).
+  work.j_side_pairs.assign(blocks, 0);
+  for (const std::uint32_t j : pairs.j) ++work.j_side_pairs[j / kRowsPerBlock];
   for (std::size_t b = 0; b < blocks; ++b) {
     const std::size_t first = b * kRowsPerBlock, last = std::min(particles, first + kRowsPerBlock);
     work.block_particles.push_back(static_cast<std::uint32_t>(last - first));
     work.own_pairs.push_back(pairs.rows[last] - pairs.rows[first]);
-    work.j_side_pairs.push_back(pairs.j_offsets[last] - pairs.j_offsets[first]);
     for (std::size_t k = pairs.rows[first]; k < pairs.rows[last]; ++k) {
       const std::size_t back = b - pairs.j[k] / kRowsPerBlock;  // j <= i: never negative
       if (back > 0) ++reach[std::min(back, span_blocks)];
@@ -158,7 +161,7 @@ ForceCosts calibrate_force_costs(const EngineFactory& make_engine, int threads,
   auto time = [&](const char* text) {
     std::unique_ptr<Engine> engine = make_engine(parse_force_variant(text), threads);
     engine->step();  // untimed: first touches of the variant's buffers
-    Timed r{{}, force_loop_work(engine->pairs(), engine->particles().size())};
+    Timed r{{}, force_loop_work(engine->force_pairs(), engine->particles().size())};
     const PhaseTimes before = engine->phase_times();
     engine->run_steps(steps);
     r.per_step = (engine->phase_times() - before) / static_cast<double>(steps);
@@ -262,7 +265,7 @@ std::vector<RankedVariant> rank_force_variants(const ForceLoopWork& work,
 
 ForceRetuner::Decision ForceRetuner::decide(const Engine& engine,
                                             const ForceVariant& current) const {
-  const ForceLoopWork work = force_loop_work(engine.pairs(), engine.particles().size());
+  const ForceLoopWork work = force_loop_work(engine.force_pairs(), engine.particles().size());
   const int threads = engine.settings().threads;
   const std::vector<RankedVariant> ranked = rank_force_variants(work, candidates_, threads, costs_);
   const double now = predict_force_pass(work, current, threads, costs_).seconds;

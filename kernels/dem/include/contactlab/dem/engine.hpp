@@ -13,6 +13,7 @@
 #include "contactlab/dem/contact_law.hpp"
 #include "contactlab/dem/force_variant.hpp"
 #include "contactlab/dem/halo.hpp"
+#include "contactlab/dem/near_pairs.hpp"
 #include "contactlab/dem/pair_list.hpp"
 #include "contactlab/dem/particles.hpp"
 #include "contactlab/dem/row_ranges.hpp"
@@ -45,6 +46,12 @@ struct EngineSettings {
   Vec3 gravity{0, 0, 0};  // m/s^2
   double dt_s = 1e-6;
   double skin = 0.0;  // m; 0 = 0.1 x the largest diameter
+  // The force pass runs on the near pairs (near_pairs.hpp): those within a margin of touching,
+  // chosen again from the neighbour list whenever a pair left out may have closed its gap. The
+  // margin starts at this fraction of the skin and follows how long a choice lasts. The forces
+  // are the same bits with or without; 0 runs on the whole list. Not with a halo (a ghost's
+  // moves are its owner's), where the whole list runs.
+  double near_margin = 0.1;
   VelocityInForces velocity_in_forces = VelocityInForces::kSynchronised;
   // Initial overlaps above this fraction of the smaller diameter are refused (InputError).
   double initial_overlap_tolerance = 0.01;
@@ -152,7 +159,14 @@ class Engine {
   std::uint64_t run_steps(std::uint64_t steps, BatchEnd end = BatchEnd::kAfterSteps);
 
   const Particles& particles() const { return particles_; }
-  const PairList& pairs() const { return pairs_; }
+  // The neighbour list with every pair's spring as of the last step.
+  const PairList& pairs() const {
+    store_pair_springs();
+    return pairs_;
+  }
+  // What the force pass runs on: the near pairs, or the whole list (near_margin 0, a halo).
+  const PairList& force_pairs() const { return near_on_ ? near_.list : pairs_; }
+  std::uint64_t near_builds() const { return near_.builds; }
   const EngineSettings& settings() const { return settings_; }
   const PairCoefficients& coefficients() const { return coefficients_; }
   double time_s() const { return time_s_; }
@@ -238,7 +252,7 @@ class Engine {
   template <StepIsa kIsa>
   void compute_forces_on(bool final_kick, bool drift_next);
   template <StepIsa kIsa>
-  void drift_on(double& max_disp_sq, std::uint32_t& bad);
+  void drift_on(double& max_disp_sq, double& max_step_sq, std::uint32_t& bad);
   void check_pair_overlap(std::size_t k) const;
   [[noreturn]] void fail(const std::string& what, std::uint32_t index) const;
 
@@ -249,8 +263,22 @@ class Engine {
   StepIsa step_isa_ = step_isa();
   PairCoefficients coefficients_;
   Particles particles_;
-  PairList pairs_;
+  // Its springs are stale while pair_springs_stale_: the force pass keeps them in near_.list,
+  // and store_pair_springs writes them back (mutable: pairs() shows them).
+  mutable PairList pairs_;
+  mutable bool pair_springs_stale_ = false;
+  void store_pair_springs() const;
+  NearPairs near_;
+  bool near_on_ = false;
+  double near_fraction_ = 0.0;       // the margin now, a fraction of the skin
+  std::uint64_t near_built_at_ = 0;  // the step of the last choice
+  static constexpr double kMinNearFraction = 1.0 / 32;
+  PairList& force_list() { return near_on_ ? near_.list : pairs_; }
+  // The near pairs chosen anew from the neighbour list: just rebuilt or restored (its springs
+  // are the ones), or as it was (the springs are the near pairs').
+  void choose_near_pairs(bool list_rebuilt);
   NeighborBuilder builder_;
+  RadixBuffers near_sort_;
   std::vector<std::uint32_t> index_of_id_;
   double time_s_ = 0.0;
   std::uint64_t step_ = 0, rebuilds_ = 0, large_overlaps_ = 0, particle_steps_ = 0;
@@ -264,7 +292,7 @@ class Engine {
   // Set when the last finish also drifted the next step (its largest displacement since the
   // list build and the first particle it failed, as the drift reports them).
   bool drifted_ = false;
-  double drifted_disp_sq_ = 0.0;
+  double drifted_disp_sq_ = 0.0, drifted_step_sq_ = 0.0;
   std::uint32_t drifted_bad_ = UINT32_MAX;
   // Set when that finish left force, torque, |F| and the contact count in acc_, not in the
   // particle arrays (it drifted the next step: before the next finish only a rebuild or a

@@ -82,6 +82,11 @@ struct PairList {
   // `threads` threads (the same lists for any count).
   void build_csr(std::size_t particles, int threads, RadixBuffers& buffers);
   void build_csr(std::size_t particles);
+  // build_csr's index alone, for a list already oriented and grouped: the rows and max_span;
+  // the j sides (which only the full list's force pass reads), and whether they are current.
+  void index_rows(std::size_t particles, int threads);
+  void index_j_sides(std::size_t particles, int threads, RadixBuffers& buffers);
+  bool j_sides_indexed = false;
 };
 
 // The j sides that one thread's rows of the ordered force pass give particles another thread
