@@ -22,9 +22,12 @@ import tempfile
 
 # Google Benchmark's CSV: name, iterations, real_time, cpu_time, time_unit, bytes_per_second,
 # items_per_second, label, error_occurred, error_message, then the counters by name.
+# (Google Benchmark orders them by name.) Benchmarks since the near pairs (8bd78c4) add two.
 COUNTERS = ["contacts_per_particle", "max_span", "pairs_per_particle", "particle_steps_per_s",
             "share_integration", "share_neighbor", "share_pair_forces", "share_reduction",
             "share_update"]
+NEAR_COUNTERS = sorted(COUNTERS + ["near_pairs_per_particle", "steps_per_near_build"])
+LAYOUTS = {10 + len(c): c for c in (COUNTERS, NEAR_COUNTERS)}
 RUN = re.compile(r'^round (\d+): contactlab (\S+) threads (\d+): (.*)$')
 LAMMPS = re.compile(r'^round (\d+): lammps ranks (\d+): ([0-9.eE+-]+) particle-steps/s$')
 SECTION = re.compile(r'^\s+lammps (\d+): (\w+)\s*\|.*\|\s*([0-9.]+)\s*$')
@@ -40,14 +43,18 @@ def parse(lines):
         line = line.rstrip("\n")
         if m := RUN.match(line):
             fields = next(csv.reader([m.group(4)]))
-            if len(fields) != 10 + len(COUNTERS):
-                fail(f"line {number}: {len(fields)} CSV fields, expected {10 + len(COUNTERS)}")
-            counters = dict(zip(COUNTERS, map(float, fields[10:])))
+            if len(fields) not in LAYOUTS:
+                fail(f"line {number}: {len(fields)} CSV fields, expected one of "
+                     f"{sorted(LAYOUTS)}")
+            counters = dict(zip(LAYOUTS[len(fields)], map(float, fields[10:])))
             key = (f"contactlab {m.group(2)}", int(m.group(3)))
-            runs.setdefault(key, {"label": fields[7], "rounds": {}, "shares": []})
+            runs.setdefault(key, {"label": fields[7], "rounds": {}, "shares": [], "near": []})
             runs[key]["rounds"][int(m.group(1))] = counters["particle_steps_per_s"]
             runs[key]["shares"].append({k[6:]: v for k, v in counters.items()
                                         if k.startswith("share_")})
+            if "near_pairs_per_particle" in counters:
+                runs[key]["near"].append({k: counters[k] for k in (
+                    "pairs_per_particle", "near_pairs_per_particle", "steps_per_near_build")})
         elif m := LAMMPS.match(line):
             key = ("LAMMPS", int(m.group(2)))
             runs.setdefault(key, {"label": f"lmp {m.group(2)} rank(s)", "rounds": {}})
@@ -93,6 +100,9 @@ def summarize(runs, breakdown):
         if "shares" in run:
             entry["phase_shares_median"] = {
                 k: statistics.median(s[k] for s in run["shares"]) for k in run["shares"][0]}
+        if run.get("near"):
+            entry["near_pairs_median"] = {
+                k: statistics.median(s[k] for s in run["near"]) for k in run["near"][0]}
         else:
             entry["timing_breakdown_median"] = {
                 k: statistics.median(v) for k, v in breakdown.get(threads, {}).items()}
@@ -130,6 +140,10 @@ def self_test():
         'round 1: contactlab best threads 2: "BM_DemStep/threads:2/real_time",2100,5.2,5.2,ms,,,'
         '"step on AVX-512",,,4.4,5122,3.75,2.4e+07,0.08,0.02,0.77,0.004,0.13',
         "round 1: lammps ranks 2: 1e+07 particle-steps/s",
+        # A benchmark with the near pairs' two counters (names in order: near_pairs_... after
+        # max_span, steps_per_near_build last).
+        'round 1: contactlab AVX2 threads 1: "BM_DemStep/threads:1/real_time",2100,5.2,5.2,ms,,,'
+        '"step on AVX2",,,4.4,5122,2.7,3.75,9e+06,0.08,0.05,0.7,0.004,0.17,36',
     ]
     result = summarize(*parse(sample))
     best = result["contactlab best 1"]
@@ -141,6 +155,12 @@ def self_test():
     two = result["contactlab best 2"]
     assert two["over_fewest_threads"]["rounds"] == [2.0], two  # round 1 only: 2.4e7 / 1.2e7
     assert "over_fewest_threads" not in best, best
+    assert "near_pairs_median" not in best, best
+    avx2 = result["contactlab AVX2 1"]
+    assert avx2["rounds"] == [9e6], avx2
+    assert avx2["near_pairs_median"] == {"pairs_per_particle": 3.75,
+                                         "near_pairs_per_particle": 2.7,
+                                         "steps_per_near_build": 36.0}, avx2
     try:
         summarize(*parse(sample[:1]))
     except SystemExit as e:
