@@ -258,11 +258,11 @@ struct DemRunCommand {
     const dem::Energies e = engine.energies();
     const dem::PhaseTimes& ph = engine.phase_times();
     fmt::print(
-        "done: t = {:.6g} s, {} steps in {:.3f} s ({:.3g} particle-steps/s), {} rebuilds, step on "
-        "{}\n",
+        "done: t = {:.6g} s, {} steps in {:.3f} s ({:.3g} particle-steps/s), {} rebuilds, {} "
+        "choices of the near pairs, step on {}\n",
         engine.time_s(), steps, wall,
         static_cast<double>(engine.particle_steps() - first_particle_steps) / std::max(wall, 1e-9),
-        engine.rebuilds(), dem::to_string(engine.instruction_set()));
+        engine.rebuilds(), engine.near_builds(), dem::to_string(engine.instruction_set()));
     fmt::print(
         "phases [s]: neighbour list {:.3f}, pair forces {:.3f}, reduction {:.3f}, serial walls "
         "{:.3f}, update {:.3f}, integration {:.3f}\n",

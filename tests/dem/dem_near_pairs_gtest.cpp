@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 #include "contactlab/dem/near_pairs.hpp"
@@ -14,7 +15,8 @@
 namespace contactlab::dem {
 namespace {
 
-constexpr std::size_t kStride = 12;  // the force pass's kinematics blocks: x y z r ...
+constexpr std::size_t kStride = 12;  // the force pass's kinematics blocks: x y z r vx vy vz ...
+constexpr double kNoneHot = std::numeric_limits<double>::infinity();
 
 // Particles on the x axis, 1 mm apart give or take 0.1 mm, radii 0.46 - 0.54 mm: pairs
 // (a, a - 1) (gaps of -0.28 to 0.28 mm) and (a, a - 2) (about 1 mm), j < i, grouped by i, and
@@ -83,7 +85,7 @@ TEST(NearPairs, TakesThePairsWithinTheMarginInTheListsOrder) {
   PairList all = line.all;
   for (const int threads : {1, 3, 8}) {
     NearPairs near;
-    near.build(all, true, line.kin.data(), kStride, line.particles, margin, threads);
+    near.build(all, true, line.kin.data(), kStride, line.particles, margin, kNoneHot, threads);
     const PairList& q = near.list;
     ASSERT_EQ(q.size(), expected.size()) << threads << " threads";
     for (std::size_t n = 0; n < q.size(); ++n) {
@@ -117,7 +119,7 @@ TEST(NearPairs, PeriodicPairsAreTestedThroughTheirImage) {
   line.kin[kStride * 0] = 0.45e-3;
   line.kin[kStride * 49 + 3] = line.kin[kStride * 0 + 3] = 0.45e-3;
   NearPairs near;
-  near.build(line.all, true, line.kin.data(), kStride, line.particles, 1e-5, 1);
+  near.build(line.all, true, line.kin.data(), kStride, line.particles, 1e-5, kNoneHot, 1);
   bool found = false;
   for (std::size_t n = 0; n < near.list.size(); ++n) {
     found = found || (near.list.i[n] == 49 && near.list.j[n] == 0 && near.list.image[n] == 14);
@@ -133,14 +135,14 @@ TEST(NearPairs, SpringsGoFromChoiceToChoiceAndBackToTheList) {
   PairList& all = line.all;
   const double margin = 1e-4;
   NearPairs near;
-  near.build(all, true, line.kin.data(), kStride, line.particles, margin, 2);
+  near.build(all, true, line.kin.data(), kStride, line.particles, margin, kNoneHot, 2);
   std::vector<bool> was_near(all.size(), false);
   for (std::size_t k = 0; k < all.size(); ++k) was_near[k] = gap(line, k) < margin;
   // The force pass's new springs: 1000 + the old.
   for (double& h : near.list.hx) h += 1000.0;
   // Particles move: every fourth one by 0.3 mm along x.
   for (std::size_t a = 0; a < line.particles; a += 4) line.kin[kStride * a] += 3e-4;
-  near.build(all, false, line.kin.data(), kStride, line.particles, margin, 3);
+  near.build(all, false, line.kin.data(), kStride, line.particles, margin, kNoneHot, 3);
   std::size_t n = 0, kept = 0, entered = 0;
   for (std::size_t k = 0; k < all.size(); ++k) {
     if (!(gap(line, k) < margin)) continue;
@@ -175,6 +177,34 @@ TEST(NearPairs, SpringsGoFromChoiceToChoiceAndBackToTheList) {
       EXPECT_EQ(all.hz[k], 0.0);
     }
   }
+}
+
+// A hot particle (faster than the speed given) has every pair taken, however far; its bit is
+// set, the others' not, with a zero byte past the last particle's.
+TEST(NearPairs, EveryPairOfAHotParticleIsTaken) {
+  Line line = make_line(77, 9);
+  for (const std::size_t a : {5u, 40u, 76u}) line.kin[kStride * a + 5] = 0.2;  // vy [m/s]
+  line.kin[kStride * 41 + 4] = 0.09;                                           // not hot at 0.1 m/s
+  NearPairs near;
+  near.build(line.all, true, line.kin.data(), kStride, line.particles, 1e-5, 0.1, 2);
+  ASSERT_EQ(near.hot.size(), 77u / 8 + 2);
+  EXPECT_EQ(near.hot.back(), 0u);
+  EXPECT_EQ(near.hot_count, 3u);
+  for (std::size_t a = 0; a < line.particles; ++a) {
+    const bool hot = a == 5 || a == 40 || a == 76;
+    EXPECT_EQ((near.hot[a / 8] >> (a % 8)) & 1, hot ? 1 : 0) << a;
+  }
+  std::size_t n = 0;
+  for (std::size_t k = 0; k < line.all.size(); ++k) {
+    const std::uint32_t i = line.all.i[k], j = line.all.j[k];
+    const bool hot = i == 5 || i == 40 || i == 76 || j == 5 || j == 40 || j == 76;
+    if (!(hot || gap(line, k) < 1e-5)) continue;
+    ASSERT_LT(n, near.list.size());
+    EXPECT_EQ(near.list.i[n], i);
+    EXPECT_EQ(near.list.j[n], j);
+    ++n;
+  }
+  EXPECT_EQ(n, near.list.size());
 }
 
 TEST(NearPairs, StaleOnceTwiceTheMovesReachTheMargin) {

@@ -4,6 +4,7 @@
 // gravity; the drift with its kinematics blocks, largest displacement and first bad particle.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstring>
 #include <limits>
 #include <random>
@@ -158,6 +159,49 @@ Drifted drift(const Particles& start, const DriftTerms& terms, bool one_by_one) 
                       d.max_step_sq, d.bad);
   }
   return d;
+}
+
+// The hot particles of the near pairs (DriftTerms::hot) are left out of the largest move, eight
+// at a time as one by one, from a range start on a lane group or not; nothing else changes.
+TEST(DemParticleUpdate, DriftLeavesHotParticlesOutOfTheLargestMove) {
+  std::mt19937_64 rng(8);
+  const Particles start = random_particles(203, rng);
+  const std::size_t n = start.x.size();
+  // Each particle's own squared move, drifted alone.
+  std::vector<double> own(n);
+  for (std::size_t a = 0; a < n; ++a) {
+    Drifted d{start, std::vector<double>(kKinStride * n, -1.0)};
+    drift_particles(d.p, d.kin.data(), {2e-6, 1e-6, 1e-6, 1.0}, ForceColumns::of(d.p), a, a + 1,
+                    d.max_disp_sq, d.max_step_sq, d.bad);
+    own[a] = d.max_step_sq;
+  }
+  // The three fastest movers hot, and two more.
+  std::vector<std::size_t> order(n);
+  for (std::size_t a = 0; a < n; ++a) order[a] = a;
+  std::sort(order.begin(), order.end(), [&](auto a, auto b) { return own[a] > own[b]; });
+  std::vector<std::uint8_t> hot(n / 8 + 2, 0);
+  for (const std::size_t a : {order[0], order[1], order[2], std::size_t{9}, std::size_t{200}}) {
+    hot[a / 8] |= static_cast<std::uint8_t>(1u << (a % 8));
+  }
+  const DriftTerms terms{2e-6, 1e-6, 1e-6, 1.0, hot.data()};
+  for (const std::size_t first : {std::size_t{0}, std::size_t{3}}) {
+    double expected = 0.0;
+    for (std::size_t a = first; a < n; ++a) {
+      if (((hot[a / 8] >> (a % 8)) & 1) == 0) expected = std::max(expected, own[a]);
+    }
+    ASSERT_LT(expected, own[order[2]]);
+    Drifted whole{start, std::vector<double>(kKinStride * n, -1.0)};
+    drift_particles(whole.p, whole.kin.data(), terms, ForceColumns::of(whole.p), first, n,
+                    whole.max_disp_sq, whole.max_step_sq, whole.bad);
+    EXPECT_EQ(whole.max_step_sq, expected) << first;
+    const Drifted plain = drift(start, {2e-6, 1e-6, 1e-6, 1.0}, false);
+    if (first == 0) {
+      EXPECT_TRUE(same_bits(whole.kin, plain.kin));
+      EXPECT_TRUE(same_bits(whole.p.x, plain.p.x));
+      EXPECT_EQ(whole.max_disp_sq, plain.max_disp_sq);
+      EXPECT_GT(plain.max_step_sq, expected);
+    }
+  }
 }
 
 TEST(DemParticleUpdate, DriftEightAtATimeMatchesOneByOne) {

@@ -145,8 +145,10 @@ TEST_P(DemSinkOlderCheckpoint, IsStillRead) {
   auto [settings, particles] = test::small_bed();
   Engine original(settings, particles);
   original.run_steps(300);
-  const std::string now = ::testing::TempDir() + "dem_sink_now.chk";
-  const std::string old = ::testing::TempDir() + "dem_sink_old.chk";
+  // A file of its own per format: ctest runs the three at once.
+  const std::string format(1, GetParam());
+  const std::string now = ::testing::TempDir() + "dem_sink_now" + format + ".chk";
+  const std::string old = ::testing::TempDir() + "dem_sink_old" + format + ".chk";
   write_checkpoint(original, 1, now);
   std::ifstream in(now, std::ios::binary);
   std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());

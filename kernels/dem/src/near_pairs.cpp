@@ -16,14 +16,32 @@ inline std::uint64_t below(unsigned b) { return (std::uint64_t{1} << b) - 1; }
 }  // namespace
 
 void NearPairs::build(const PairList& all, bool springs_in_all, const double* kin,
-                      std::size_t stride, std::size_t particles, double margin_m, int threads) {
+                      std::size_t stride, std::size_t particles, double margin_m, double hot_speed,
+                      int threads) {
+  // The hot particles, eight to a byte (each byte one thread's).
+  const std::size_t bytes = (particles + 7) / 8;
+  hot.assign(bytes + 1, 0);
+  const double hot_sq = hot_speed * hot_speed;
+  std::size_t hot_total = 0;
+#pragma omp parallel for schedule(static) num_threads(threads) reduction(+ : hot_total)
+  for (std::size_t b = 0; b < bytes; ++b) {
+    unsigned bits = 0;
+    for (std::size_t p = 8 * b; p < std::min(particles, 8 * b + 8); ++p) {
+      const double* v = kin + stride * p + 4;
+      bits |= static_cast<unsigned>(v[0] * v[0] + v[1] * v[1] + v[2] * v[2] > hot_sq) << (p % 8);
+    }
+    hot[b] = static_cast<std::uint8_t>(bits);
+    hot_total += static_cast<std::size_t>(std::popcount(bits));
+  }
+  hot_count = hot_total;
+  auto is_hot = [&](std::uint32_t p) { return ((hot[p / 8] >> (p % 8)) & 1u) != 0; };
   const std::size_t count = all.size();
   const std::size_t words = (count + kWord - 1) / kWord;
   next_taken_.resize(words);
   next_taken_before_.resize(words + 1);
   // The test over words of 64 pairs (so that a thread's range holds whole words), with no
   // branch on its outcome (near or not is a coin toss on a bed: 60 / 40); then the pairs taken
-  // copied word by word, their bits visited in order.
+  // copied word by word, their bits visited in order. A hot particle's pairs are all taken.
   count_then_fill(
       words, threads,
       [&](std::size_t first, std::size_t last) {
@@ -38,7 +56,9 @@ void NearPairs::build(const PairList& all, bool springs_in_all, const double* ki
             const double dx = ki[0] - kj[0] - sh[0], dy = ki[1] - kj[1] - sh[1],
                          dz = ki[2] - kj[2] - sh[2];
             const double reach = ki[3] + kj[3] + margin_m;
-            bits |= std::uint64_t{dx * dx + dy * dy + dz * dz < reach * reach} << (k - k0);
+            const bool is_near =
+                (dx * dx + dy * dy + dz * dz < reach * reach) | is_hot(all.i[k]) | is_hot(all.j[k]);
+            bits |= std::uint64_t{is_near} << (k - k0);
           }
           next_taken_[w] = bits;
           taken += static_cast<std::size_t>(std::popcount(bits));

@@ -190,13 +190,23 @@ struct DriftTerms {
   double dt, half_dt;    // [s]
   double kick;           // the velocities the forces see: v + a kick [s] (0: the half-step ones)
   double move_limit_sq;  // (skin/2)^2 [m^2]: a longer move in one step fails the run
+  // Bit p % 8 of byte p / 8 set: particle p is left out of max_step_sq (a hot particle of the
+  // near pairs, whose every pair is near: NearPairs::hot). Null: none is.
+  const std::uint8_t* hot = nullptr;
 };
+
+// The hot bits of particles [a, a + 8) as one byte (`hot` holds a byte past the last
+// particle's).
+[[gnu::always_inline]] inline unsigned hot_byte(const std::uint8_t* hot, std::size_t a) {
+  const unsigned two = hot[a / 8] | static_cast<unsigned>(hot[a / 8 + 1]) << 8;
+  return (two >> (a % 8)) & 0xFFu;
+}
 
 // Drifts particles [first, last): v += a dt/2, x += v dt, their kinematics blocks rewritten
 // (position, radius, the velocities the forces see, mass); max_disp_sq rises to the largest
 // squared displacement since the last list build, max_step_sq to the largest squared move of
-// this step, bad falls to the first particle that moved more than the limit or whose position
-// is not finite.
+// this step (of the particles not hot), bad falls to the first particle that moved more than
+// the limit or whose position is not finite.
 // Force and torque come from `forces` (the arrays, or the finish's piece buffer).
 inline void drift_particles(Particles& p, double* kin, const DriftTerms& t,
                             const ForceColumns& forces, std::size_t first, std::size_t last,
@@ -249,7 +259,14 @@ inline void drift_particles(Particles& p, double* kin, const DriftTerms& t,
     const Lanes disp = ddx * ddx + ddy * ddy + ddz * ddz;
     disp_max = select(disp_max < disp, disp, disp_max);
     const Lanes step_sq = mx * mx + my * my + mz * mz, sum = xa + ya + za;
-    step_max = select(step_max < step_sq, step_sq, step_max);
+    const unsigned hot = t.hot == nullptr ? 0u : hot_byte(t.hot, a);
+    if (hot == 0) [[likely]] {
+      step_max = select(step_max < step_sq, step_sq, step_max);
+    } else {  // a few in a hundred groups
+      for (std::size_t l = 0; l < kLanes; ++l) {
+        if (((hot >> l) & 1u) == 0) max_step_sq = std::max(max_step_sq, step_sq[l]);
+      }
+    }
     // x - x is 0 exactly when x is finite (inf - inf and NaN - NaN are NaN).
     // NOLINTNEXTLINE(misc-redundant-expression): that finiteness test, on purpose
     if (any_false((step_sq <= limit) & (sum - sum == 0.0))) [[unlikely]] {
@@ -298,7 +315,9 @@ inline void drift_particles(Particles& p, double* kin, const DriftTerms& t,
                  ddz = arrays.z[a] - arrays.z0[a];
     max_disp_sq = std::max(max_disp_sq, ddx * ddx + ddy * ddy + ddz * ddz);
     const double step_sq = mx * mx + my * my + mz * mz;
-    max_step_sq = std::max(max_step_sq, step_sq);
+    if (t.hot == nullptr || ((t.hot[a / 8] >> (a % 8)) & 1u) == 0) {
+      max_step_sq = std::max(max_step_sq, step_sq);
+    }
     if (!(step_sq <= limit) || !std::isfinite(arrays.x[a] + arrays.y[a] + arrays.z[a])) {
       bad = std::min(bad, static_cast<std::uint32_t>(a));
     }

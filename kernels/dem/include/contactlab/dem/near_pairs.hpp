@@ -5,9 +5,11 @@
 // near pairs are those whose gap is under a margin well below the skin, chosen again from the
 // neighbour list (no cell search, no reorder) whenever the particles may have closed it: no
 // pair left out can touch while twice the sum over steps of the largest move is under the
-// margin. A pair left out is apart throughout, its spring zero and its outputs zero, so the
-// sums (each particle's own row, then its j sides in pair order) add the same numbers in the
-// same order: the forces are those of the whole list, bit for bit.
+// margin. The few fast particles of a settled bed (its rattlers: the fastest moves 10x the
+// 99th percentile) would set that pace alone: they are *hot*, every pair of theirs is near, and
+// their moves do not count. A pair left out is apart throughout, its spring zero and its outputs
+// zero, so the sums (each particle's own row, then its j sides in pair order) add the same numbers
+// in the same order: the forces are those of the whole list, bit for bit.
 #pragma once
 
 #include <cstddef>
@@ -23,21 +25,27 @@ struct NearPairs {
   // their springs, constants and rows (j sides: PairList::index_j_sides) and the periodic shifts.
   PairList list;
   double margin = 0.0;  // m: the pairs taken had a gap under it
-  double moved = 0.0;   // m: since the build, the sum over steps of the largest move
+  // m: since the build, the sum over steps of the largest move of a particle not hot
+  double moved = 0.0;
   std::uint64_t builds = 0;
+  // Bit p % 8 of byte p / 8 set: particle p is hot (all its pairs taken; its moves do not count
+  // in `moved`), and a zero byte past the last particle's (DriftTerms::hot reads two at once).
+  std::vector<std::uint8_t> hot;
+  std::size_t hot_count = 0;
 
   // Whether a pair left out may touch by now: twice `moved` (each particle of a pair at most
   // `moved` nearer) has reached the margin.
   bool stale() const { return 2.0 * moved >= margin; }
 
-  // The pairs of `all` whose gap is under `margin` [m], from the positions and radii of the
-  // blocks `kin` (particle p's x, y, z, r at kin[stride p ..]: what the force pass reads), with
-  // m* and 1/k_t as `all` has them, on `threads` threads (the same list for any count). `all`
+  // The pairs of `all` whose gap is under `margin` [m] or with a particle faster than
+  // `hot_speed` [m/s] (infinity: none), from the positions, radii and velocities of the blocks
+  // `kin` (particle p's x, y, z, r, vx, vy, vz at kin[stride p ..]: what the force pass reads),
+  // with m* and 1/k_t as `all` has them, on `threads` threads (the same list for any count). `all`
   // must be oriented and grouped (build_csr) with its constants set. The springs come from
   // `all` where `springs_in_all` (it was just built or restored), else from this list, which
   // must have been built from the same `all` (a pair it left out has a zero spring).
   void build(const PairList& all, bool springs_in_all, const double* kin, std::size_t stride,
-             std::size_t particles, double margin, int threads);
+             std::size_t particles, double margin, double hot_speed, int threads);
   // Every spring of `all` as of now: the near pairs', and zero for the pairs left out.
   void write_back(PairList& all, int threads) const;
 
