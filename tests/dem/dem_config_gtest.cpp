@@ -53,6 +53,14 @@ TEST(DemConfig, ReadsAGoodConfig) {
   EXPECT_DOUBLE_EQ(c.settings.walls[2].remove_at_s, 0.1);
 }
 
+// The near pairs' first margin: 0.1 of the skin unless the config says (0: the whole list).
+TEST(DemConfig, ReadsTheNearMargin) {
+  json config = good();
+  EXPECT_EQ(parse_dem_config(config).settings.near_margin, 0.1);
+  config["neighbor"] = {{"near_margin", 0}};
+  EXPECT_EQ(parse_dem_config(config).settings.near_margin, 0.0);
+}
+
 TEST(DemConfig, ReadsTheSinkLevel) {
   json config = good();
   EXPECT_EQ(parse_dem_config(config).settings.sink_below_z,
@@ -130,6 +138,11 @@ TEST(DemConfig, BadConfigsGetOneClearError) {
       {"particle in a wall", [](json& j) { j["particles"][0]["position"][2] = 0.0005; },
        "overlaps wall"},
       {"dt too large", [](json& j) { j["time"]["dt"] = 1e-4; }, "stable limit"},
+      {"near margin above the skin",
+       [](json& j) {
+         j["neighbor"] = {{"near_margin", 1.5}};
+       },
+       "$.neighbor.near_margin: must be in [0, 1], got 1.5"},
       {"unknown distribution", [](json& j) { j["lattices"][0]["radius_distribution"] = "gamma"; },
        "$.lattices[0].radius_distribution"},
       {"log-normal without sigma",

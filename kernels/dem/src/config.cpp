@@ -239,6 +239,8 @@ DemConfig parse_dem_config(const json& document) {
   if (const auto nb = o.optional_field("neighbor")) {
     ObjectIn n(*nb);
     s.skin = number(n, "skin", 0.0, 0.0, kHuge);
+    // The near pairs' first margin, a fraction of the skin (0: the force pass on the whole list).
+    s.near_margin = number(n, "near_margin", s.near_margin, 0.0, 1.0);
     n.finish();
   }
   s.initial_overlap_tolerance = number(o, "initial_overlap_tolerance", 0.01, 0.0, 0.1);
