@@ -19,6 +19,19 @@
 namespace contactlab::dem {
 namespace {
 
+// Two runs' forces, torques, |F|, contact counts and the pair list's springs, bit for bit.
+void expect_same_forces_and_springs(const Engine& a, const Engine& b, const std::string& what) {
+  const Particles &p = a.particles(), &q = b.particles();
+  for (auto member : {&Particles::fx, &Particles::fy, &Particles::fz, &Particles::tx,
+                      &Particles::ty, &Particles::tz, &Particles::force_magnitude}) {
+    EXPECT_TRUE(test::bitwise_equal(p.*member, q.*member)) << what;
+  }
+  EXPECT_EQ(p.contacts, q.contacts) << what;
+  for (auto spring : {&PairList::hx, &PairList::hy, &PairList::hz}) {
+    EXPECT_TRUE(test::bitwise_equal(a.pairs().*spring, b.pairs().*spring)) << what;
+  }
+}
+
 // Eight threads on the 150 particles: ranges of about 16 particles, shorter than a j side's
 // reach, moved step by step by the threads' timings (RowRanges) and, oversubscribed, far apart.
 TEST(DemEngine, BitIdenticalForAnyThreadCount) {
@@ -83,13 +96,7 @@ TEST(DemEngine, BatchedStepsMatchSingleSteps) {
           << variant << ", " << threads << " threads";
       // Force, torque, |F| and the contact count: the batch's last step stores them, its
       // earlier ones left them in the sums (particle_update.hpp, FinishOut).
-      const Particles &b = batched.particles(), &o = single.particles();
-      for (auto member : {&Particles::fx, &Particles::fy, &Particles::fz, &Particles::tx,
-                          &Particles::ty, &Particles::tz, &Particles::force_magnitude}) {
-        EXPECT_TRUE(test::bitwise_equal(b.*member, o.*member)) << variant;
-      }
-      EXPECT_EQ(b.contacts, o.contacts) << variant;
-      EXPECT_TRUE(test::bitwise_equal(batched.pairs().hx, single.pairs().hx)) << variant;
+      expect_same_forces_and_springs(batched, single, variant);
     }
   }
 }
@@ -161,15 +168,7 @@ TEST(DemEngine, NearPairsGiveTheWholeListsBits) {
         }
         EXPECT_EQ(near.rebuilds(), whole.rebuilds()) << what;
         EXPECT_TRUE(test::bitwise_equal(test::state_by_id(near), test::state_by_id(whole))) << what;
-        const Particles &a = near.particles(), &b = whole.particles();
-        for (auto member : {&Particles::fx, &Particles::fy, &Particles::fz, &Particles::tx,
-                            &Particles::ty, &Particles::tz, &Particles::force_magnitude}) {
-          EXPECT_TRUE(test::bitwise_equal(a.*member, b.*member)) << what;
-        }
-        EXPECT_EQ(a.contacts, b.contacts) << what;
-        EXPECT_TRUE(test::bitwise_equal(near.pairs().hx, whole.pairs().hx)) << what;
-        EXPECT_TRUE(test::bitwise_equal(near.pairs().hy, whole.pairs().hy)) << what;
-        EXPECT_TRUE(test::bitwise_equal(near.pairs().hz, whole.pairs().hz)) << what;
+        expect_same_forces_and_springs(near, whole, what);
         EXPECT_EQ(near.energies().potential, whole.energies().potential) << what;
         EXPECT_EQ(near.large_overlap_count(), whole.large_overlap_count()) << what;
       }
