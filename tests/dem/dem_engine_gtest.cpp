@@ -22,10 +22,10 @@ namespace {
 // Whether a force variant's bits are fixed at a thread count (force_variant.hpp): always, but
 // for the atomic adds and the per-thread arrays dealt out dynamically on more than one thread,
 // whose order of additions follows the threads' timing.
-bool bits_fixed(const std::string& variant, int threads) {
-  return threads == 1 ||
-         (variant.find("atomic") == std::string::npos &&
-          !(variant.starts_with("per-thread") && variant.find("dynamic") != std::string::npos));
+bool bits_fixed(const std::string& text, int threads) {
+  const ForceVariant v = parse_force_variant(text);
+  return threads == 1 || thread_count_invariant(v) ||
+         (v.accumulation == Accumulation::kPerThread && v.schedule.kind == ScheduleKind::kStatic);
 }
 
 // Two runs' forces, torques, |F|, contact counts and the pair list's springs, bit for bit.
