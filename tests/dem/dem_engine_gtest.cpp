@@ -267,28 +267,45 @@ TEST(DemEngine, BatchedStepsFailWhereSingleStepsFail) {
     }
     return std::string("no failure");
   };
-  auto [settings, particles] = test::small_bed(20);
-  settings.threads = 2;
-  EngineSettings pushed = settings;
-  pushed.gravity = {2e5, 0, 0};  // along the periodic x: a move longer than skin/2 in time
-  const std::string moved = message(pushed, particles, false);
-  EXPECT_NE(moved.find("moved"), std::string::npos) << moved;
-  EXPECT_EQ(message(pushed, particles, true), moved);
-  EngineSettings falling = settings;
-  falling.gravity = {0, 0, -2e5};  // into the floor: the overlap with the wall passes 10 %
-  const std::string into_wall = message(falling, particles, false);
-  EXPECT_NE(into_wall.find("wall"), std::string::npos) << into_wall;
-  EXPECT_EQ(message(falling, particles, true), into_wall);
+  // update=fused drifts pieces of particles among the pairs, once no later row reads them: on a
+  // bed of 640 at one thread, among rows not yet computed (two blocks of rows; the head-on pair
+  // below lies in the first).
+  struct Case {
+    std::uint32_t particles;
+    int threads;
+    const char* variant;
+  };
+  for (const Case& c : {Case{20, 2, "ordered/static"}, Case{20, 2, "ordered/static/update=fused"},
+                        Case{640, 1, "ordered/static/update=fused"}}) {
+    auto [settings, particles] = test::small_bed(c.particles);
+    settings.threads = c.threads;
+    settings.force_variant = parse_force_variant(c.variant);
+    const std::string variant =
+        std::string(c.variant) + ", " + std::to_string(c.particles) + " particles";
+    EngineSettings pushed = settings;
+    pushed.gravity = {2e5, 0, 0};  // along the periodic x: a move longer than skin/2 in time
+    const std::string moved = message(pushed, particles, false);
+    EXPECT_NE(moved.find("moved"), std::string::npos) << variant << ": " << moved;
+    EXPECT_EQ(message(pushed, particles, true), moved) << variant;
+    EngineSettings falling = settings;
+    falling.gravity = {0, 0, -2e5};  // into the floor: the overlap with the wall passes 10 %
+    const std::string into_wall = message(falling, particles, false);
+    EXPECT_NE(into_wall.find("wall"), std::string::npos) << variant << ": " << into_wall;
+    EXPECT_EQ(message(falling, particles, true), into_wall) << variant;
+    Particles head_on = particles;  // particles 0 and 1 meet at 12 m/s: the overlap passes 10 %
+    head_on.vx[0] = 6.0;
+    head_on.vx[1] = -6.0;
+    head_on.y[1] = head_on.y[0];
+    head_on.z[1] = head_on.z[0];
+    const std::string overlap = message(settings, head_on, false);
+    EXPECT_NE(overlap.find("overlap"), std::string::npos) << variant << ": " << overlap;
+    EXPECT_EQ(message(settings, head_on, true), overlap) << variant;
+  }
+  auto [falling, particles] = test::small_bed(20);
+  falling.threads = 2;
+  falling.gravity = {0, 0, -2e5};
   falling.force_variant = parse_force_variant("ordered/static/walls=serial");  // one thread's
   EXPECT_EQ(message(falling, particles, true), message(falling, particles, false));
-  Particles head_on = particles;  // particles 0 and 1 meet at 12 m/s: the overlap passes 10 %
-  head_on.vx[0] = 6.0;
-  head_on.vx[1] = -6.0;
-  head_on.y[1] = head_on.y[0];
-  head_on.z[1] = head_on.z[0];
-  const std::string overlap = message(settings, head_on, false);
-  EXPECT_NE(overlap.find("overlap"), std::string::npos) << overlap;
-  EXPECT_EQ(message(settings, head_on, true), overlap);
 }
 
 TEST(DemEngine, BitIdenticalForAnySchedule) {

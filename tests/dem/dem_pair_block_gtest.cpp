@@ -120,8 +120,7 @@ void expect_rows_match_one_by_one(std::size_t first, std::size_t last, SpringsTo
   PairBlock blk(storage);
   std::uint64_t large = 0;
   std::uint32_t bad = UINT32_MAX;
-  pair_rows<kRolling, true>(s.kin.data(), s.q, s.c, 1e-3, first, last, springs, blk, s.acc.data(),
-                            large, bad);
+  pair_rows<kRolling, true>(s.kin.data(), s.q, s.c, 1e-3, first, last, springs, blk, large, bad);
   const std::string where = "rows [" + std::to_string(first) + ", " + std::to_string(last) + ")";
   EXPECT_TRUE(same_bits(blk.records(), expected.records.data(), expected.records.size())) << where;
   const auto& hx = springs == SpringsTo::kNext ? s.q.hx_next : s.q.hx;
@@ -210,8 +209,8 @@ TEST(DemForcePass, FlatRowsMatchNestedRows) {
     PairBlock blk(storage);
     std::uint64_t large = 0;
     std::uint32_t bad = UINT32_MAX;
-    pair_rows<true, true>(s.kin.data(), s.q, s.c, 1e-3, first, last, SpringsTo::kNext, blk,
-                          s.acc.data(), large, bad);
+    pair_rows<true, true>(s.kin.data(), s.q, s.c, 1e-3, first, last, SpringsTo::kNext, blk, large,
+                          bad);
     std::vector<double> flat(s.acc.size(), 7.0), nested(s.acc.size(), 7.0);
     auto j_side_into = [&](std::vector<double>& acc) {
       return [&](const double* p, const double* const* roll, std::size_t k, std::size_t b) {

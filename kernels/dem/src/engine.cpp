@@ -409,10 +409,14 @@ bool Engine::advance(bool drift_next, bool end_at_rebuild) {
       phases_.neighbor_s += omp_get_wtime() - t1;
     }
   }
-  // The finish can drift only once every pair has read the kinematics blocks: after the pass
-  // (update=separate), not among the pairs.
-  compute_forces(
-      true, drift_next && !(rebuilds && end_at_rebuild) && !settings_.force_variant.fused_update);
+  // The finish can drift a particle only once every pair that reads its kinematics block is
+  // done: after the pass (update=separate), or among the ordered pass's rows (update=fused: a
+  // particle is finished once no later row reaches it, and no row reads it after that), not among
+  // the full list's blocks (another thread's block may still read any particle's).
+  const ForceVariant& variant = settings_.force_variant;
+  compute_forces(true,
+                 drift_next && !(rebuilds && end_at_rebuild) &&
+                     !(variant.fused_update && variant.accumulation != Accumulation::kOrdered));
   return rebuilds;
 }
 

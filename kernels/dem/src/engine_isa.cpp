@@ -119,12 +119,14 @@ void Engine::compute_forces_on<StepIsa::kAvx512>(bool final_kick, bool drift_nex
   compute_forces_on<StepIsa::kBaseline>(final_kick, drift_next);
 }
 template <>
-void Engine::drift_on<StepIsa::kAvx2>(double& max_disp_sq, std::uint32_t& bad) {
-  drift_on<StepIsa::kBaseline>(max_disp_sq, bad);
+void Engine::drift_on<StepIsa::kAvx2>(double& max_disp_sq, double& max_step_sq,
+                                      std::uint32_t& bad) {
+  drift_on<StepIsa::kBaseline>(max_disp_sq, max_step_sq, bad);
 }
 template <>
-void Engine::drift_on<StepIsa::kAvx512>(double& max_disp_sq, std::uint32_t& bad) {
-  drift_on<StepIsa::kBaseline>(max_disp_sq, bad);
+void Engine::drift_on<StepIsa::kAvx512>(double& max_disp_sq, double& max_step_sq,
+                                        std::uint32_t& bad) {
+  drift_on<StepIsa::kBaseline>(max_disp_sq, max_step_sq, bad);
 }
 }  // namespace contactlab::dem
 #endif

@@ -234,10 +234,17 @@ void force_pass(const double* kin, std::size_t n, PairList& q, const PairCoeffic
   std::size_t next = b;  // the next particle to finish
   for (std::size_t first = b; first < e; first += kOrderedBlockRows) {
     const std::size_t last = std::min(e, first + kOrderedBlockRows);
-    pair_rows<kRolling, kClamp>(kin, q, c, dt, first, last, SpringsTo::kList, blk, acc, large_here,
+    pair_rows<kRolling, kClamp>(kin, q, c, dt, first, last, SpringsTo::kList, blk, large_here,
                                 bad_here);
     accumulate_ordered<kRolling>(kin, q, first, last, blk, b, acc, left_for);
     if (next + lag < last) {
+      // Known to the finish, which then drifts nothing: a failed run's message shows a failed
+      // pair's particles where this step found them.
+      if (bad_here != UINT32_MAX) {
+        combine_counts(large_here, bad_here, large, bad_pair);
+        large_here = 0;
+        bad_here = UINT32_MAX;
+      }
       finish(next, last - lag, true, large_here, bad_wall_here);
       next = last - lag;
     }
@@ -377,8 +384,8 @@ void force_pass_shared(const double* kin, std::size_t n, PairList& q, const Pair
   }
   PairBlock blk(scratch);
   for_each_block(n, [&](std::size_t first, std::size_t last) {
-    pair_rows<kRolling, kClamp>(kin, q, c, dt, first, last, SpringsTo::kList, blk, target,
-                                large_here, bad_here);
+    pair_rows<kRolling, kClamp>(kin, q, c, dt, first, last, SpringsTo::kList, blk, large_here,
+                                bad_here);
     if (atomic) {
       accumulate_shared<kRolling, true>(kin, q, first, last, blk, target);
     } else {
@@ -450,7 +457,7 @@ void force_pass_full(const double* kin, std::size_t n, PairList& q, const PairCo
   PairBlock blk(scratch);
   for_each_block(n, [&](std::size_t first, std::size_t last) {
     const std::size_t e0 = q.j_offsets[first], e1 = q.j_offsets[last];
-    pair_rows<kRolling, kClamp>(kin, q, c, dt, first, last, SpringsTo::kNext, blk, acc, large_here,
+    pair_rows<kRolling, kClamp>(kin, q, c, dt, first, last, SpringsTo::kNext, blk, large_here,
                                 bad_here);
     accumulate_rows<kRolling>(kin, q, first, last, blk, acc);
     pair_gathered<kRolling, kClamp>(kin, q, c, dt, q.j_pairs.data() + e0, e1 - e0, blk);

@@ -36,12 +36,18 @@ constexpr std::size_t kKinStride = 12;
 // Per particle, kAccStride doubles, summed in pair order by the force pass: force [N],
 // torque [N m], touching contacts.
 constexpr std::size_t kAccStride = 8;
-// How many pairs ahead the pair kernel prefetches its partners' data (8, one group, was 3 %
-// slower on the bed: the partners arrived late).
-constexpr std::size_t kPartnerAhead = 32;
 // Whether the pair kernel puts two groups of eight pairs through the law at once (lane_pair.hpp):
 // where a register holds eight doubles.
 constexpr bool kTwoGroups = kLaneParts == 1;
+// Whether the pair kernel prefetches its partners' kin blocks, and how many pairs ahead (8, one
+// group, was 3 % slower on the bed: the partners arrived late). Not where two groups go at once:
+// on the near pairs (near_pairs.hpp) the partners are mostly in L2 from their own rows, and there
+// the loop is bound by its instructions, which the prefetches added to (the bed's step without
+// them, interleaved on a Xeon: 1.02 - 1.03x at one thread, 1.02 - 1.04x at two); on four lanes
+// (AVX2) without them it was 0.98x. Their sums' lines are not prefetched: read by the sums after
+// the whole block, they had left L1 by then (no difference with or without, AVX-512 and AVX2).
+constexpr bool kPrefetchPartners = !kTwoGroups;
+constexpr std::size_t kPartnerAhead = 32;
 
 // 1 / k_t of a contact of reduced mass m_star [kg] (0 where k_t is 0): per pair it is a
 // constant of the list (PairList::inv_kt), per wall contact computed on the spot.
@@ -347,7 +353,7 @@ enum class SpringsTo { kList, kNext };
 template <bool kRolling, bool kClamp>
 inline void pair_rows(const double* kin, PairList& q, const PairCoefficients& c, double dt,
                       std::size_t first, std::size_t last, SpringsTo springs, PairBlock& blk,
-                      const double* acc, std::uint64_t& large, std::uint32_t& bad) {
+                      std::uint64_t& large, std::uint32_t& bad) {
   const std::size_t k0 = q.rows[first], k1 = q.rows[last];
   blk.reserve(k1 - k0);
   double* hx_out = (springs == SpringsTo::kNext ? q.hx_next : q.hx).data();
@@ -356,14 +362,14 @@ inline void pair_rows(const double* kin, PairList& q, const PairCoefficients& c,
   // Three steps of a group, each inlined by force: called from two loops, they were calls, the
   // inputs went through memory, and the step ran at 0.7 of its speed.
   // Partners lie up to max_span particles back (L2 or beyond, out of reach of the hardware
-  // prefetcher): the kin blocks and sums of those of pairs [k, k + count) + kPartnerAhead.
+  // prefetcher): the kin blocks of those of pairs [k, k + count) + kPartnerAhead.
   auto prefetch_partners = [&](std::size_t k, std::size_t count) __attribute__((always_inline)) {
+    if constexpr (!kPrefetchPartners) return;
     for (std::size_t a = k + kPartnerAhead; a < std::min(k + kPartnerAhead + count, q.j.size());
          ++a) {
       const std::size_t ahead = q.j[a];
       __builtin_prefetch(kin + kKinStride * ahead);
       __builtin_prefetch(kin + kKinStride * ahead + kKinStride - 1);
-      __builtin_prefetch(acc + kAccStride * ahead, 1);
     }
   };
   // Pairs [k, k + 8): their inputs, and where their springs and records go.
