@@ -61,7 +61,11 @@ TEST(DemNeighborList, EqualsBruteForceWithPeriodicImages) {
   for (std::size_t k = 1; k < particles.size(); ++k)
     descents += particles.z[k] + 3e-3 < particles.z[k - 1];
   EXPECT_EQ(descents, 0u);
-  // Rows hold each particle's pairs as i; the j lists hold the others: every pair once each.
+  // Rows hold each particle's pairs as i; the j lists (indexed on demand) hold the others: every
+  // pair once each.
+  EXPECT_FALSE(pairs.j_sides_indexed);
+  RadixBuffers buffers;
+  pairs.index_j_sides(particles.size(), 2, buffers);
   std::vector<int> seen_i(pairs.size(), 0), seen_j(pairs.size(), 0);
   for (std::size_t a = 0; a < particles.size(); ++a) {
     for (std::uint32_t k = pairs.rows[a]; k < pairs.rows[a + 1]; ++k) {

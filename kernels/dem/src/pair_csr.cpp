@@ -105,7 +105,6 @@ void PairList::build_csr(std::size_t particles, int threads, RadixBuffers& buffe
     gather(hz, buffers.real_scratch, order, threads);
   }
   index_rows(particles, threads);
-  index_j_sides(particles, threads, buffers);
 }
 
 void PairList::index_rows(std::size_t particles, int threads) {

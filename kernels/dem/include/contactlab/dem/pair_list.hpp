@@ -78,12 +78,13 @@ struct PairList {
   void resize(std::size_t n);
   // As resize, for a list the caller fills anew (i, j, image, springs).
   void resize_to_overwrite(std::size_t n);
-  // Orients (j < i, springs and images follow), groups by i, and indexes rows and j sides, on
+  // Orients (j < i, springs and images follow), groups by i, and indexes rows (index_rows), on
   // `threads` threads (the same lists for any count).
   void build_csr(std::size_t particles, int threads, RadixBuffers& buffers);
   void build_csr(std::size_t particles);
-  // build_csr's index alone, for a list already oriented and grouped: the rows and max_span;
-  // the j sides (which only the full list's force pass reads), and whether they are current.
+  // build_csr's index alone, for a list already oriented and grouped: the rows and max_span.
+  // The j sides, which only the full list's force pass reads, on demand (4 ms of the settled
+  // bed's 60 ms rebuild at one thread, where no pass read them), and whether they are current.
   void index_rows(std::size_t particles, int threads);
   void index_j_sides(std::size_t particles, int threads, RadixBuffers& buffers);
   bool j_sides_indexed = false;
