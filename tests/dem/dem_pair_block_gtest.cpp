@@ -232,5 +232,13 @@ TEST(DemForcePass, FlatRowsMatchNestedRows) {
   EXPECT_GT(empty_rows, 10u);
 }
 
+// The partners are prefetched on four lanes always, and with AVX-512's two groups only where the
+// span's kin blocks and sums outgrow half of the core's L2.
+TEST(DemPairBlock, PartnersArePrefetchedWhereTheirSpanOutgrowsL2) {
+  EXPECT_GT(l2_bytes(), 0u);
+  EXPECT_TRUE(prefetch_partners_of(l2_bytes() / sizeof(double)));
+  EXPECT_EQ(prefetch_partners_of(64), !kTwoGroups);
+}
+
 }  // namespace
 }  // namespace contactlab::dem::detail

@@ -7,6 +7,7 @@
 // the linker could keep that copy for the whole program.
 #include <fmt/core.h>
 #include <omp.h>
+#include <unistd.h>  // pair_block.hpp: sysconf
 #if defined(__x86_64__)
 #include <immintrin.h>  // lanes.hpp: the square roots
 #endif

@@ -5,6 +5,8 @@
 // same law on doubles.
 // Compiled once per instruction set (dem_isa.hpp): a toggle, no include guard.
 
+#include <unistd.h>  // sysconf: the L2's size
+
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -39,15 +41,30 @@ constexpr std::size_t kAccStride = 8;
 // Whether the pair kernel puts two groups of eight pairs through the law at once (lane_pair.hpp):
 // where a register holds eight doubles.
 constexpr bool kTwoGroups = kLaneParts == 1;
-// Whether the pair kernel prefetches its partners' kin blocks, and how many pairs ahead (8, one
-// group, was 3 % slower on the bed: the partners arrived late). Not where two groups go at once:
-// on the near pairs (near_pairs.hpp) the partners are mostly in L2 from their own rows, and there
-// the loop is bound by its instructions, which the prefetches added to (the bed's step without
-// them, interleaved on a Xeon: 1.02 - 1.03x at one thread, 1.02 - 1.04x at two); on four lanes
-// (AVX2) without them it was 0.98x. Their sums' lines are not prefetched: read by the sums after
-// the whole block, they had left L1 by then (no difference with or without, AVX-512 and AVX2).
-constexpr bool kPrefetchPartners = !kTwoGroups;
+// How many pairs ahead the pair kernel prefetches its partners' kin blocks (8, one group, was 3 %
+// slower on the bed: the partners arrived late). Their sums' lines are not prefetched: read by
+// the sums after the whole block, they had left L1 by then (no difference with or without).
 constexpr std::size_t kPartnerAhead = 32;
+
+// The bytes of L2 a core has (sysconf; 1 MiB where the system does not say).
+inline std::size_t l2_bytes() {
+  static const std::size_t bytes = [] {
+    const long b = sysconf(_SC_LEVEL2_CACHE_SIZE);
+    return b > 0 ? static_cast<std::size_t>(b) : std::size_t{1} << 20;
+  }();
+  return bytes;
+}
+
+// Whether the pair kernel prefetches the partners of a list whose pairs reach max_span particles
+// back. Always on four lanes (AVX2: 0.98x the bed's step without). Where two groups go at once
+// (AVX-512) only if the partners' blocks and sums within that span (160 bytes a particle) fill more
+// than half of L2: on the settled bed's near pairs (0.8 MB of them, a 2 MiB L2) they are there
+// from their own rows and the loop is bound by its instructions, which the prefetches added to
+// (the step without them, interleaved on a Xeon: 1.02 - 1.03x at one thread, 1.02 - 1.04x at
+// two), where the 900,000-particle hopper, its partners megabytes back, ran 12 % slower without.
+inline bool prefetch_partners_of(std::size_t max_span) {
+  return !kTwoGroups || max_span * (kKinStride + kAccStride) * sizeof(double) > l2_bytes() / 2;
+}
 
 // 1 / k_t of a contact of reduced mass m_star [kg] (0 where k_t is 0): per pair it is a
 // constant of the list (PairList::inv_kt), per wall contact computed on the spot.
@@ -363,8 +380,9 @@ inline void pair_rows(const double* kin, PairList& q, const PairCoefficients& c,
   // inputs went through memory, and the step ran at 0.7 of its speed.
   // Partners lie up to max_span particles back (L2 or beyond, out of reach of the hardware
   // prefetcher): the kin blocks of those of pairs [k, k + count) + kPartnerAhead.
+  const bool prefetch = prefetch_partners_of(q.max_span);
   auto prefetch_partners = [&](std::size_t k, std::size_t count) __attribute__((always_inline)) {
-    if constexpr (!kPrefetchPartners) return;
+    if (!prefetch) return;
     for (std::size_t a = k + kPartnerAhead; a < std::min(k + kPartnerAhead + count, q.j.size());
          ++a) {
       const std::size_t ahead = q.j[a];
