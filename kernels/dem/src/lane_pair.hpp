@@ -34,6 +34,7 @@ struct TwoGroups {
 };
 
 // An operator on both groups: (two groups, two groups) and (two groups, double), giving R.
+// NOLINTBEGIN(bugprone-macro-parentheses): op is an operator's token, which parentheses break
 #define CONTACTLAB_TWO_GROUPS_BINARY(op, R)                                             \
   [[gnu::always_inline]] inline R operator op(const TwoGroups& x, const TwoGroups& y) { \
     return {x.a op y.a, x.b op y.b};                                                    \
@@ -52,6 +53,7 @@ struct TwoGroups {
     x.b = x.b op y.b;                                                                         \
     return x;                                                                                 \
   }
+// NOLINTEND(bugprone-macro-parentheses)
 CONTACTLAB_TWO_GROUPS_ARITHMETIC(+)
 CONTACTLAB_TWO_GROUPS_ARITHMETIC(-)
 CONTACTLAB_TWO_GROUPS_ARITHMETIC(*)
