@@ -2,6 +2,10 @@
 
 #include <omp.h>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 #include <algorithm>
 #include <array>
 #include <atomic>
@@ -146,9 +150,9 @@ std::size_t CellRegistry::index_bytes() const {
 
 std::size_t CellRegistry::buffer_bytes() const {
   auto bytes = [](const auto& v) { return v.size() * sizeof(*v.data()); };
-  return index_bytes() + bytes(slot_particle) + bytes(particle_slot) + bytes(sort_buffer_) +
-         bytes(sort_scratch_) + bytes(wide_buffer_) + bytes(wide_scratch_) + bytes(histograms_) +
-         bytes(new_cells_);
+  return index_bytes() + bytes(slot_particle) + bytes(particle_slot) + bytes(staged_) +
+         bytes(sort_buffer_) + bytes(sort_scratch_) + bytes(wide_buffer_) + bytes(wide_scratch_) +
+         bytes(histograms_) + bytes(new_cells_);
 }
 
 void CellRegistry::assign(const CellGrid& grid, const Scene& scene, SortedCoordinates* sorted,
@@ -168,14 +172,18 @@ void CellRegistry::assign(const CellGrid& grid, const Scene& scene, SortedCoordi
   int key_bits = 1;
   while (key_bits < 64 && (std::uint64_t{1} << key_bits) < grid.key_count()) ++key_bits;
   slot_particle.resize(n);
+  // Kept between runs once made (an unsorted run after a sorted one leaves it): a sweep
+  // alternates orders, and a fresh 32 bytes a particle would be faulted in again each time.
+  if (sorted) staged_.resize(n);
+  StagedParticle* const staged = sorted ? staged_.data() : nullptr;
   if (key_bits <= 32) {
     LargeVector<WideEntry>().swap(wide_buffer_);
     LargeVector<WideEntry>().swap(wide_scratch_);
-    sort_and_index(grid, scene, team, key_bits, sort_buffer_, sort_scratch_);
+    sort_and_index(grid, scene, team, key_bits, sort_buffer_, sort_scratch_, staged);
   } else {
     LargeVector<NarrowEntry>().swap(sort_buffer_);
     LargeVector<NarrowEntry>().swap(sort_scratch_);
-    sort_and_index(grid, scene, team, key_bits, wide_buffer_, wide_scratch_);
+    sort_and_index(grid, scene, team, key_bits, wide_buffer_, wide_scratch_, staged);
   }
   if (hashed) occupied.build_table(static_cast<int>(team));
   const double registered = omp_get_wtime();
@@ -188,26 +196,23 @@ void CellRegistry::assign(const CellGrid& grid, const Scene& scene, SortedCoordi
     sorted->z.resize(n);
     sorted->diameter.resize(scene.diameter.size());
     const bool diameters = scene.has_diameters();
-    // The reads are at random: they are requested kAhead slots early, so that their misses
-    // overlap instead of each waiting for the last. 64: on the paper's scene T_s fell from
-    // 0.0186 s (16 ahead) to 0.0173 (32) and 0.0157 (64); 128 and 256 were no faster. The
-    // diameters too: unrequested, a polydisperse scene's T_s at two threads was 1.08x as long
-    // (median of 6 rounds; no difference at one).
+    // The records are read at random: each is requested kAhead slots early, so that the misses
+    // overlap instead of each waiting for the last. 64: on the paper's scene the gather from
+    // the scene's arrays had taken 0.0186 s (16 ahead), 0.0173 (32) and 0.0157 (64); 128 and
+    // 256 were no faster.
     constexpr std::size_t kAhead = 64;
+    const StagedParticle* const from = staged;
+    const std::uint32_t* const particle_of = slot_particle.data();
+    double *const x = sorted->x.data(), *const y = sorted->y.data(), *const z = sorted->z.data(),
+                  *const d = sorted->diameter.data();
 #pragma omp parallel for schedule(static) num_threads(static_cast <int>(team))
     for (std::size_t s = 0; s < n; ++s) {
-      if (s + kAhead < n) {
-        const std::uint32_t ahead = slot_particle[s + kAhead];
-        __builtin_prefetch(scene.x.data() + ahead);
-        __builtin_prefetch(scene.y.data() + ahead);
-        __builtin_prefetch(scene.z.data() + ahead);
-        if (diameters) __builtin_prefetch(scene.diameter.data() + ahead);
-      }
-      const std::uint32_t i = slot_particle[s];
-      sorted->x[s] = scene.x[i];
-      sorted->y[s] = scene.y[i];
-      sorted->z[s] = scene.z[i];
-      if (diameters) sorted->diameter[s] = scene.diameter[i];
+      if (s + kAhead < n) __builtin_prefetch(from + particle_of[s + kAhead]);
+      const StagedParticle& p = from[particle_of[s]];
+      x[s] = p.x;
+      y[s] = p.y;
+      z[s] = p.z;
+      if (diameters) d[s] = p.diameter;
     }
     particle_slot.clear();
   } else {
@@ -220,6 +225,29 @@ void CellRegistry::assign(const CellGrid& grid, const Scene& scene, SortedCoordi
 }
 
 namespace {
+
+// One particle's record, written past the caches where the target has such stores: the records
+// are read back at random after the sort, by then evicted on a large scene, and a store that
+// first reads its line cost the keys' pass 5 ms on the paper's scene at one thread.
+inline void stage(void* record, double x, double y, double z, double diameter) {
+  auto* const to = static_cast<double*>(record);
+#if defined(__SSE2__)
+  _mm_stream_pd(to, _mm_set_pd(y, x));
+  _mm_stream_pd(to + 2, _mm_set_pd(diameter, z));
+#else
+  to[0] = x;
+  to[1] = y;
+  to[2] = z;
+  to[3] = diameter;
+#endif
+}
+
+// The streamed records are ordered before the barrier that lets other threads read them.
+inline void staged_written() {
+#if defined(__SSE2__)
+  _mm_sfence();
+#endif
+}
 
 // 8-bit digits: three passes over a 199^3 grid's 23-bit keys ran 6 % faster than two passes
 // of 12 bits, whose 4096 scatter streams (one line each) outgrow L1 and the TLB.
@@ -262,7 +290,7 @@ void scatter_by_digit(const Entry* source, Entry* target, std::uint64_t first, s
 template <class Entry>
 void CellRegistry::sort_and_index(const CellGrid& grid, const Scene& scene, std::size_t team,
                                   int key_bits, LargeVector<Entry>& buffer,
-                                  LargeVector<Entry>& scratch) {
+                                  LargeVector<Entry>& scratch, StagedParticle* staged) {
   const std::size_t n = scene.size();
   const std::uint64_t keys = grid.key_count();
   const int passes = (key_bits + kDigitBits - 1) / kDigitBits;
@@ -307,6 +335,7 @@ void CellRegistry::sort_and_index(const CellGrid& grid, const Scene& scene, std:
     // dense grid's wide keys are its keys.
     constexpr std::size_t kKeyBlock = 256;
     std::uint64_t block_keys[kKeyBlock];
+    const double* const diameter = scene.diameter.empty() ? nullptr : scene.diameter.data();
     for (std::size_t first = b; first < e; first += kKeyBlock) {
       const std::size_t count = std::min(kKeyBlock, e - first);
       grid.keys_of(scene.x.data() + first, scene.y.data() + first, scene.z.data() + first, count,
@@ -315,7 +344,13 @@ void CellRegistry::sort_and_index(const CellGrid& grid, const Scene& scene, std:
         from[first + k] = Entry::make(block_keys[k], first + k);
         ++mine[digit_of(block_keys[k], first_shift, first_mask)];
       }
+      if (staged) {
+        for (std::size_t i = first; i < first + count; ++i) {
+          stage(staged + i, scene.x[i], scene.y[i], scene.z[i], diameter ? diameter[i] : 0.0);
+        }
+      }
     }
+    if (staged) staged_written();
     Entry* in = from;
     Entry* out = to;
     // One stable pass over [b, e) by the digit at `shift`, from `in` to `out`, with this thread's

@@ -35,10 +35,11 @@ DetectionTraffic detection_traffic(const Variant& variant, const DetectionWork& 
   const auto passes = static_cast<double>(radix_passes);
   t.setup_bytes = n * (input_record + 8.0) + passes * 2.0 * 8.0 * n + 4.0 * keys;
   if (sorted) {
-    // The reordering gathers each particle's coordinates from the input arrays in cell order:
-    // a line of each array (the input order is the scene's, not the cells'), and writes the
-    // sorted record and the slot -> particle map.
-    t.setup_bytes += n * (arrays * kLineBytes + record + 4.0);
+    // The keys' pass streams each particle's 32-byte staged record (coordinates and diameter,
+    // CellRegistry::assign); the reordering gathers them in cell order, a line each (the input
+    // order is the scene's, not the cells'), and writes the sorted record and reads the
+    // slot -> particle map.
+    t.setup_bytes += n * (kStagedBytes + kLineBytes + record + 4.0);
   } else {
     // The slot maps both ways, and a narrowed copy of the coordinates for float.
     t.setup_bytes += n * 8.0 + (variant.precision == Precision::kFloat ? n * record : 0.0);

@@ -231,10 +231,21 @@ struct CellRegistry {
     std::uint64_t key() const { return key_; }
     std::uint32_t index() const { return index_; }
   };
+  // A particle's coordinates and diameter (0 without per-particle diameters) side by side, in
+  // input order: the reordering's gather reads one 32-byte record, half a line, where reading
+  // the scene's arrays took a line of each (and, in std::vector's 4 KiB pages, a TLB miss of
+  // each) at random.
+  struct alignas(32) StagedParticle {
+    double x, y, z, diameter;
+  };
+  // With `staged`, the keys' pass also writes every particle's record there (the coordinates are
+  // in L1 from the keys).
   template <class Entry>
   void sort_and_index(const CellGrid& grid, const Scene& scene, std::size_t team, int key_bits,
-                      LargeVector<Entry>& buffer, LargeVector<Entry>& scratch);
+                      LargeVector<Entry>& buffer, LargeVector<Entry>& scratch,
+                      StagedParticle* staged);
 
+  LargeVector<StagedParticle> staged_;  // sorted orders only: the reordering's source
   LargeVector<NarrowEntry> sort_buffer_, sort_scratch_;
   LargeVector<WideEntry> wide_buffer_, wide_scratch_;
   std::vector<std::uint64_t> histograms_;    // per thread, the radix digit counts

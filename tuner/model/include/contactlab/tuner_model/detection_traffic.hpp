@@ -3,7 +3,7 @@
 // takes at least its bytes over the bandwidth its threads draw: bandwidth.hpp). A stated model,
 // not a measurement (docs/emulation.md, "Bandwidth"): caches are assumed to hold what a sweep
 // in cell order reuses (the stencil's layers of a sorted scene) and nothing that is reached at
-// random (an unsorted scene's candidates, the gather of the reordering).
+// random (an unsorted scene's candidates, the reordering's gather of staged records).
 #pragma once
 
 #include <cstdint>
@@ -37,6 +37,9 @@ struct DetectionTraffic {
 
 // The 64-byte line a random access moves.
 inline constexpr double kLineBytes = 64.0;
+// A particle's record staged for the reordering (coordinates and diameter, written past the
+// caches): sorted orders only.
+inline constexpr double kStagedBytes = 32.0;
 
 // From a loop's exact work: the sum over its iterations of tests / homes (the cell loop tests
 // each candidate against every home of its cell; the particle loop has one home).
