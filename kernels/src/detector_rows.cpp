@@ -414,10 +414,10 @@ ContactDetector::BufferBytes ContactDetector::buffer_bytes() const {
   add(contacts_.offsets);
   add(contacts_.partners);
   bytes.total += registry_.buffer_bytes();
-  add(sorted_.x);
-  add(sorted_.y);
-  add(sorted_.z);
-  add(sorted_.diameter);
+  add(working_.x);
+  add(working_.y);
+  add(working_.z);
+  add(working_.diameter);
   add(narrow_x_);
   add(narrow_y_);
   add(narrow_z_);

@@ -41,8 +41,9 @@ DetectionTraffic detection_traffic(const Variant& variant, const DetectionWork& 
     // slot -> particle map.
     t.setup_bytes += n * (kStagedBytes + kLineBytes + record + 4.0);
   } else {
-    // The slot maps both ways, and a narrowed copy of the coordinates for float.
-    t.setup_bytes += n * 8.0 + (variant.precision == Precision::kFloat ? n * record : 0.0);
+    // The slot maps both ways, and a copy of the coordinates in the input order: narrowed for
+    // float, into huge pages for double (ContactDetector::copy_in_input_order).
+    t.setup_bytes += n * (8.0 + record);
   }
   // The loop: sorted, each particle's record streamed once (the three layers of cells a row of
   // the stencil reaches are taken to stay in cache while the sweep crosses them) and the cell

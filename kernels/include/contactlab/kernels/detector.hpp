@@ -240,13 +240,17 @@ class ContactDetector {
   void finish_offsets(int tid, int threads, std::uint32_t first, std::uint32_t last,
                       std::uint64_t rows_sum);
   void copy_row_blocks(int tid, int threads);
+  void copy_in_input_order(const Scene& scene, int threads);
 
   std::vector<std::uint64_t> range_sums_;  // assemble_rows: each thread's rows, summed
   BalancedBlocks balanced_blocks_;         // the balanced schedule's blocks (traverse.hpp)
   CellRegistry registry_;
-  SortedCoordinates sorted_;  // coordinates in slot order, for the sorted orders
+  // The coordinates in working order: slot order (sorted orders), or the input's copied into
+  // huge pages (unsorted double: copy_in_input_order).
+  SortedCoordinates working_;
   LargeVector<float> narrow_x_, narrow_y_, narrow_z_, narrow_d_;  // single-precision copies
   bool working_is_sorted_ = false;  // working ids are slots (sorted orders) or input rows
+  bool working_is_copy_ = false;    // unsorted: working_ holds the input order's copy
   ContactList contacts_;
   // Per-thread partner buffers and per-particle bookkeeping, kept between runs.
   std::vector<detail::ThreadOutput> thread_out_;
