@@ -300,17 +300,18 @@ void CellRegistry::sort_and_index(const CellGrid& grid, const Scene& scene, std:
   if (!hashed) cell_begin.resize(keys + 1);
   new_cells_.assign(team + 1, 0);
   range_totals_.resize(team);
-  // With more than one thread the top digit goes first, over all entries, and each thread
-  // then sorts whole top buckets by the lower digits on its own: every lower pass reads and
-  // writes only lines of its thread. By lowest digit first, every pass scattered each thread's
-  // entries into lines the other threads read in the next pass: on the paper scene the three
-  // passes took 5.6 ms at one thread and 5.2 ms at two, top first 3.2 ms at two. At one thread
-  // top first ran slower (6.1 ms): the buckets' passes fit in L2 but gained nothing.
+  // The top digit goes first, over all entries, and each thread then sorts whole top buckets by
+  // the lower digits on its own: every lower pass reads and writes only lines of its thread,
+  // a bucket's worth, in L2. By lowest digit first, every pass scattered each thread's entries
+  // into lines the other threads read in the next pass: on the paper scene (AMD EPYC VM) the
+  // three passes took 5.6 ms at one thread and 5.2 ms at two, top first 3.2 ms at two. At one
+  // thread that VM ran top first 0.5 ms slower (6.1 ms); the Intel Xeon VM, whose memory is
+  // slower beside its L2, 4 ms faster (14.1 -> 10.1 ms, 2026-12-07), so top first at any count.
   // The top digit is the key's top kDigitBits bits (it may share bits with the last lower
   // digit, which are then the same within a top bucket): 256 buckets, so that a thread's share
   // of whole buckets is close to an even one (the paper scene's fullest holds 2.5 %; with the
   // 7 bits left above the lower digits' 16, 5 %).
-  const bool top_first = team > 1 && passes > 1;
+  const bool top_first = passes > 1;
   const int first_bits = top_first ? top_digit_bits(team, key_bits) : kDigitBits;
   const int first_shift = top_first ? key_bits - first_bits : 0;
   const std::size_t buckets = std::size_t{1} << first_bits;  // of the first pass
