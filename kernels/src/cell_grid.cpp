@@ -148,6 +148,14 @@ std::size_t CellRegistry::index_bytes() const {
   return hashed ? occupied.bytes() : cell_begin.capacity() * sizeof(std::uint32_t);
 }
 
+void CellRegistry::release_scratch() {
+  LargeVector<StagedParticle>().swap(staged_);
+  LargeVector<NarrowEntry>().swap(sort_buffer_);
+  LargeVector<NarrowEntry>().swap(sort_scratch_);
+  LargeVector<WideEntry>().swap(wide_buffer_);
+  LargeVector<WideEntry>().swap(wide_scratch_);
+}
+
 std::size_t CellRegistry::buffer_bytes() const {
   auto bytes = [](const auto& v) { return v.size() * sizeof(*v.data()); };
   return index_bytes() + bytes(slot_particle) + bytes(particle_slot) + bytes(staged_) +

@@ -373,6 +373,7 @@ void ContactDetector::release_buffers() {
   LargeVector<std::uint64_t>().swap(row_weight_);
   working_ = {};
   narrow_x_ = narrow_y_ = narrow_z_ = narrow_d_ = {};
+  registry_.release_scratch();
 }
 
 // The same traversal as run(), with an op that counts instead of testing.

@@ -207,6 +207,10 @@ struct CellRegistry {
   void assign(const CellGrid& grid, const Scene& scene, SortedCoordinates* sorted = nullptr,
               int threads = 1, bool hashed_index = false);
 
+  // Frees what only assign() reads (the sort's entries, the staged records), keeping the
+  // index and the slots; the next assign() reallocates it.
+  void release_scratch();
+
   // Bytes held by the cell index (the dense table, or the occupied cells and their table).
   std::size_t index_bytes() const;
   // Bytes of everything registered: the index, the slots and the sort's buffers (their

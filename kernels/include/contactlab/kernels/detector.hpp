@@ -196,7 +196,8 @@ class ContactDetector {
   ContactList neighbor_list(const Scene& scene, const DetectOptions& options, double skin);
 
   // Frees the buffers kept between runs for speed (per-thread partner lists and bookkeeping,
-  // the reordered and single-precision copies), keeping contacts() and working_to_input():
+  // the reordered and single-precision copies, the registration's sort buffers and staged
+  // records), keeping contacts() and working_to_input():
   // for a caller that next needs the memory (the MPI output). The next run reallocates them.
   void release_buffers();
 
