@@ -200,7 +200,8 @@ CellGrid ContactDetector::prepare(const Scene& scene, const DetectOptions& optio
   registry_.assign(grid, scene, working_is_sorted_ ? &working_ : nullptr, run.threads,
                    use_hashed_index(options.variant.grid, grid, scene.size()));
   const double copy_start = omp_get_wtime();
-  working_is_copy_ = !working_is_sorted_ && options.variant.precision == Precision::kDouble;
+  working_is_copy_ = !working_is_sorted_ && options.variant.precision == Precision::kDouble &&
+                     copy_for_random_reads(scene);
   if (working_is_copy_) copy_in_input_order(scene, run.threads);
   run.setup_s = omp_get_wtime() - setup_start;
   run.registration_s = registry_.registration_s;
@@ -212,10 +213,10 @@ CellGrid ContactDetector::prepare(const Scene& scene, const DetectOptions& optio
 }
 
 // The unsorted double loops read their candidates' coordinates at random in the input order:
-// from this copy in huge pages (LargeVector), where the scene's std::vector arrays lie in 4 KiB
-// pages and nearly every candidate's reads also missed the TLB (the paper scene's unsorted
-// particle loop: T_c 2.97 - 3.08 s -> 2.28 - 2.35 s at one thread). The order is the input's:
-// this is no reordering. Counted in T_s, in its reorder part.
+// from this copy in huge pages (LargeVector) where the scene is past copy_for_random_reads, for
+// its std::vector arrays lie in 4 KiB pages and nearly every candidate's reads also missed the
+// TLB (the paper scene's unsorted particle loop: T_c 2.97 - 3.08 s -> 2.28 - 2.35 s at one
+// thread). The order is the input's: this is no reordering. Counted in T_s, in its reorder part.
 void ContactDetector::copy_in_input_order(const Scene& scene, int threads) {
   const std::size_t n = scene.size();
   const bool diameters = scene.has_diameters();

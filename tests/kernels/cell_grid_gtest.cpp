@@ -351,32 +351,42 @@ TEST(CellRegistry, FourPassesTopDigitFirst) {
   }
 }
 
-// The reordering's staged records and the sort's entries are scratch: released, the registry
-// keeps its index and slots, and the next assign makes them again with the same result.
+// The reordering's staged records (scenes past copy_for_random_reads only) and the sort's
+// entries are scratch: released, the registry keeps its index and slots, and the next assign
+// makes them again with the same result. Either way the sorted copy is the scene in slot order.
 TEST(CellRegistry, ScratchIsReleasedAndRemade) {
-  SceneSpec spec;
-  spec.kind = SceneKind::kPolydisperse;
-  spec.n = 4000;
-  spec.seed = 9;
-  const Scene scene = generate_scene(spec);
-  const CellGrid grid(scene.box, scene.max_diameter(), CellNumbering::kLinear);
-  CellRegistry registry;
-  SortedCoordinates sorted;
-  registry.assign(grid, scene, &sorted, 2);
-  const std::vector<std::uint32_t> slots(registry.slot_particle.begin(),
-                                         registry.slot_particle.end());
-  const std::size_t with_scratch = registry.buffer_bytes();
-  registry.release_scratch();
-  // 32 bytes a particle staged, and two 8-byte sort entries.
-  EXPECT_EQ(with_scratch - registry.buffer_bytes(), std::size_t{48} * spec.n);
-  EXPECT_TRUE(std::equal(slots.begin(), slots.end(), registry.slot_particle.begin(),
-                         registry.slot_particle.end()));
-  SortedCoordinates again;
-  registry.assign(grid, scene, &again, 2);
-  EXPECT_EQ(registry.buffer_bytes(), with_scratch);
-  for (std::size_t s = 0; s < spec.n; ++s) {
-    ASSERT_EQ(again.x[s], sorted.x[s]);
-    ASSERT_EQ(again.diameter[s], sorted.diameter[s]);
+  for (const std::size_t n : {std::size_t{4000}, std::size_t{140000}}) {
+    SceneSpec spec;
+    spec.kind = SceneKind::kPolydisperse;
+    spec.n = n;
+    spec.diameter = 0.002;
+    spec.seed = 9;
+    const Scene scene = generate_scene(spec);
+    const bool staged = n * 4 * sizeof(double) >= kCopyForRandomReadsFrom;  // four arrays
+    ASSERT_EQ(copy_for_random_reads(scene), staged) << n;
+    const CellGrid grid(scene.box, scene.max_diameter(), CellNumbering::kLinear);
+    CellRegistry registry;
+    SortedCoordinates sorted;
+    registry.assign(grid, scene, &sorted, 3);
+    for (std::size_t s = 0; s < n; ++s) {
+      const std::uint32_t i = registry.slot_particle[s];
+      ASSERT_EQ(sorted.x[s], scene.x[i]);
+      ASSERT_EQ(sorted.y[s], scene.y[i]);
+      ASSERT_EQ(sorted.z[s], scene.z[i]);
+      ASSERT_EQ(sorted.diameter[s], scene.diameter[i]);
+    }
+    const std::vector<std::uint32_t> slots(registry.slot_particle.begin(),
+                                           registry.slot_particle.end());
+    const std::size_t with_scratch = registry.buffer_bytes();
+    registry.release_scratch();
+    // Two 8-byte sort entries a particle, and 32 bytes staged.
+    EXPECT_EQ(with_scratch - registry.buffer_bytes(), (staged ? 48 : 16) * n);
+    EXPECT_TRUE(std::equal(slots.begin(), slots.end(), registry.slot_particle.begin(),
+                           registry.slot_particle.end()));
+    SortedCoordinates again;
+    registry.assign(grid, scene, &again, 3);
+    EXPECT_EQ(registry.buffer_bytes(), with_scratch);
+    EXPECT_TRUE(std::equal(again.x.begin(), again.x.end(), sorted.x.begin(), sorted.x.end()));
   }
 }
 

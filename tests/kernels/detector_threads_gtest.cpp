@@ -86,6 +86,35 @@ TEST(DetectionThreads, EveryThreadCountMatchesTheBruteForce) {
   }
 }
 
+// Scenes past copy_for_random_reads are read at random from copies (the sorted orders' staged
+// records, the unsorted double loops' copy in huge pages), smaller ones from their arrays, which
+// the brute-force cases above check. Too large for the brute force here, each variant is held
+// against the float unsorted loop, which reads neither copy.
+TEST(DetectionThreads, LargeScenesReadCopiesAndFindTheSameContacts) {
+  for (const auto kind : {SceneKind::kClustered, SceneKind::kPolydisperse}) {
+    SceneSpec spec;
+    spec.kind = kind;
+    spec.n = 180000;
+    spec.diameter = kind == SceneKind::kClustered ? 0.004 : 0.02;  // 2.5 and 2 contacts a particle
+    spec.seed = 12;
+    const Scene scene = generate_scene(spec);
+    ASSERT_TRUE(copy_for_random_reads(scene));
+    const ContactList reference =
+        detect(scene, parse_variant("particle/unsorted/full/static/float"), spec.diameter, 2)
+            .contacts;
+    ASSERT_GT(reference.partners.size(), spec.n / 2);
+    for (const char* text : {"particle/unsorted/full/static", "cell/unsorted/full/static",
+                             "particle/sorted/full/static", "particle/sorted/half/static,64",
+                             "cell/morton/half/static"}) {
+      for (const int threads : {1, 3}) {
+        SCOPED_TRACE(std::string(text) + " at " + std::to_string(threads) + " threads");
+        EXPECT_TRUE(detect(scene, parse_variant(text), spec.diameter, threads).contacts ==
+                    reference);
+      }
+    }
+  }
+}
+
 // The balanced schedule's point: on a centre-clustered scene the block schedule's threads get
 // very unequal shares of the work, the balanced blocks nearly equal ones. The work is what the
 // blocks weigh, a thread's pair tests plus kHomeTests for each of its homes (counted, not

@@ -4,6 +4,8 @@
 #include <bit>
 #include <stdexcept>
 
+#include "contactlab/kernels/cell_grid.hpp"
+
 namespace contactlab::tuner {
 
 std::uint64_t candidate_fetches(const WorkView& work) {
@@ -25,6 +27,8 @@ DetectionTraffic detection_traffic(const Variant& variant, const DetectionWork& 
   const double input_record = 8.0 * arrays;  // the scene's doubles
   const double record = (variant.precision == Precision::kFloat ? 4.0 : 8.0) * arrays;
   const bool sorted = variant.order != Order::kUnsorted;
+  // What the kernels' registration and detector decide from the scene's size (cell_grid.hpp).
+  const bool copied = n * arrays * sizeof(double) >= static_cast<double>(kCopyForRandomReadsFrom);
   const double finds = variant.stencil == Stencil::kHalf ? entries / 2.0 : entries;
 
   DetectionTraffic t;
@@ -35,15 +39,18 @@ DetectionTraffic detection_traffic(const Variant& variant, const DetectionWork& 
   const auto passes = static_cast<double>(radix_passes);
   t.setup_bytes = n * (input_record + 8.0) + passes * 2.0 * 8.0 * n + 4.0 * keys;
   if (sorted) {
-    // The keys' pass streams each particle's 32-byte staged record (coordinates and diameter,
-    // CellRegistry::assign); the reordering gathers them in cell order, a line each (the input
-    // order is the scene's, not the cells'), and writes the sorted record and reads the
-    // slot -> particle map.
-    t.setup_bytes += n * (kStagedBytes + kLineBytes + record + 4.0);
+    // The reordering gathers each particle's coordinates in cell order (the input order is the
+    // scene's, not the cells'): past copy_for_random_reads, one line of the 32-byte record that
+    // the keys' pass streamed (CellRegistry::assign), else a line of each array; and writes the
+    // sorted record and reads the slot -> particle map.
+    const double gathered = copied ? kStagedBytes + kLineBytes : arrays * kLineBytes;
+    t.setup_bytes += n * (gathered + record + 4.0);
   } else {
     // The slot maps both ways, and a copy of the coordinates in the input order: narrowed for
-    // float, into huge pages for double (ContactDetector::copy_in_input_order).
-    t.setup_bytes += n * (8.0 + record);
+    // float, into huge pages for double past copy_for_random_reads
+    // (ContactDetector::copy_in_input_order).
+    const bool copy = variant.precision == Precision::kFloat || copied;
+    t.setup_bytes += n * (8.0 + (copy ? record : 0.0));
   }
   // The loop: sorted, each particle's record streamed once (the three layers of cells a row of
   // the stencil reaches are taken to stay in cache while the sweep crosses them) and the cell

@@ -117,6 +117,16 @@ class CellGrid {
   std::uint64_t key_count_ = 1;
 };
 
+// Whether a scene's coordinate arrays are large enough that reading them at random pays for a
+// copy first (the reordering's staged records; the unsorted loops' copy in huge pages): from
+// kCopyForRandomReadsFrom bytes of arrays. The scene's std::vector arrays lie in 4 KiB pages and
+// the copies in huge pages written as a stream; on the 2-core Xeon VM (clustered, D = 1/200,
+// 2026-12-07) the copies made T_ALL 0.91 - 0.94 of the direct reads at 1,024,000 particles
+// (24 MB of arrays), 0.93 - 1.01 at 300,000 (7.2 MB) and 1.00 - 1.10 at 100,000 (2.4 MB: a
+// few MB that L2, L3 and the TLB's reach hold).
+inline constexpr std::size_t kCopyForRandomReadsFrom = std::size_t{4} << 20;  // bytes
+bool copy_for_random_reads(const Scene& scene);
+
 // Coordinates (and diameters, where the scene has them) in slot order: the paper's reordering.
 // LargeVectors: filled, and their pages first touched, by the registering threads.
 struct SortedCoordinates {
