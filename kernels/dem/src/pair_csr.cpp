@@ -24,7 +24,7 @@ namespace {
 // whose list was a few pairs longer (6 - 20 ms each in the settled bed's first rebuilds).
 template <class T, class Allocator>
 void resize_with_spare(std::vector<T, Allocator>& v, std::size_t n) {
-  if (v.capacity() < n + n / 8) v.reserve(n + n / 8);
+  if (v.capacity() < with_spare(n)) v.reserve(with_spare(n));
   v.resize(n);
 }
 }  // namespace

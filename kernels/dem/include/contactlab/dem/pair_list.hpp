@@ -33,11 +33,12 @@ inline constexpr std::uint8_t kNoImage = 13;
 // exactly, the pairs' arrays and their scratch were reallocated, copied and faulted in at nearly
 // every rebuild (the settled bed: 7 ms of a 54 ms rebuild in the pairs' resize alone, and page
 // faults do not get faster with more threads).
+inline constexpr std::size_t with_spare(std::size_t n) { return n + n / 8; }
 template <class T, class Allocator>
 void resize_to_overwrite(std::vector<T, Allocator>& v, std::size_t n) {
   if (n > v.capacity()) {
     std::vector<T, Allocator> fresh;
-    fresh.reserve(n + n / 8);
+    fresh.reserve(with_spare(n));
     v.swap(fresh);
   }
   v.resize(n);
